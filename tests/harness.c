@@ -1,0 +1,76 @@
+/* Test runner: runs every registered test (or those whose name contains argv[1]),
+ * prints one line per test, and ends with "N passed, M failed". */
+#include "harness.h"
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_TESTS 1024
+
+static struct { const char *name; shl_test_fn fn; } tests[MAX_TESTS];
+static int ntests;
+static int current_failures;
+static char notes[2048];
+
+void harness_register(const char *name, shl_test_fn fn)
+{
+    if (ntests < MAX_TESTS) {
+        tests[ntests].name = name;
+        tests[ntests].fn = fn;
+        ++ntests;
+    }
+}
+
+void harness_fail(const char *file, int line, const char *fmt, ...)
+{
+    if (++current_failures > 10) return; /* keep the log readable */
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stdout, "    %s:%d: ", file, line);
+    vfprintf(stdout, fmt, ap);
+    fputc('\n', stdout);
+    va_end(ap);
+}
+
+void harness_note(const char *fmt, ...)
+{
+    size_t len = strlen(notes);
+    if (len + 4 >= sizeof notes) return;
+    if (len) { strcat(notes, "; "); len += 2; }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(notes + len, sizeof notes - len, fmt, ap);
+    va_end(ap);
+}
+
+int harness_failed_current(void) { return current_failures; }
+
+static int by_name(const void *a, const void *b)
+{
+    const char *na = *(const char *const *)a, *nb = *(const char *const *)b;
+    return strcmp(na, nb);
+}
+
+int main(int argc, char **argv)
+{
+    const char *filter = argc > 1 ? argv[1] : NULL;
+    int passed = 0, failed = 0;
+    qsort(tests, (size_t)ntests, sizeof tests[0], by_name);
+    for (int i = 0; i < ntests; ++i) {
+        if (filter && !strstr(tests[i].name, filter)) continue;
+        current_failures = 0;
+        notes[0] = '\0';
+        tests[i].fn();
+        if (current_failures == 0) {
+            ++passed;
+            printf("ok   %s%s%s\n", tests[i].name, notes[0] ? "  -- " : "", notes);
+        } else {
+            ++failed;
+            printf("FAIL %s (%d failed checks)%s%s\n", tests[i].name, current_failures,
+                   notes[0] ? "  -- " : "", notes);
+        }
+        fflush(stdout);
+    }
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed ? 1 : 0;
+}
