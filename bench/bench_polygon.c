@@ -1,0 +1,202 @@
+/* Polygon-light coefficient benchmark (Wang & Ramamoorthi 2018):
+ *  - time per evaluation vs lmax with the ZH-recurrence / rotation split (Fig. 6),
+ *  - time vs number of edges (Fig. 7), with fitted exponents,
+ *  - ZH recurrence vs the monomial-moment baseline (Table 2 "Monomial"),
+ *  - scalar evaluations per second per core (the SIMD baseline).
+ * All ratios come from one run.  CSV: $BUILD/bench/bench_polygon.csv (argv[1] overrides). */
+#include "monomial.h"
+#include "polygon.h"
+#include "shlight.h"
+#include "util.h"
+#include <math.h>
+#include <stdlib.h>
+
+enum { NPTS = 64 };
+
+typedef struct {
+    const shl_ctx *ctx;
+    int lmax, n;
+    double verts[3 * SHL_MAX_VERTS];
+    double pts[NPTS][3];
+    float vf[3 * SHL_MAX_VERTS], pf[NPTS][3];
+    long inner;
+    shl__poly_geom geom[NPTS];
+} job;
+
+static double zh_buf[(2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE], coef_buf[SHL_NCOEFFS(SHL_LMAX_MAX)];
+
+static void run_full(void *p)
+{
+    job *j = p;
+    double acc = 0;
+    for (long i = 0; i < j->inner; ++i) {
+        shl_polygon(j->ctx, j->pts[i % NPTS], j->verts, j->n, coef_buf);
+        acc += coef_buf[0];
+    }
+    bench_sink += acc;
+}
+
+static void run_full_f(void *p)
+{
+    job *j = p;
+    float out[SHL_NCOEFFS(SHL_LMAX_MAX)];
+    double acc = 0;
+    for (long i = 0; i < j->inner; ++i) {
+        shl_polygon_f(j->ctx, j->pf[i % NPTS], j->vf, j->n, out);
+        acc += out[0];
+    }
+    bench_sink += acc;
+}
+
+static void run_geom_zh(void *p) /* per-edge setup + ZH recurrence */
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        shl__poly_geom_init(&j->geom[0], j->pts[i % NPTS], j->verts, j->n);
+        shl__poly_zh_d(&j->geom[0], j->lmax, zh_buf);
+        bench_sink += zh_buf[1];
+    }
+}
+
+static void run_rotation(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        zh_buf[0] += 1e-300; /* a dependency so the call is not hoisted */
+        shl__zh_to_sh(j->lmax, zh_buf, coef_buf);
+        bench_sink += coef_buf[1];
+    }
+}
+
+static void run_zh_only(void *p) /* recurrence only, geometry precomputed */
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) shl__poly_zh_d(&j->geom[i % NPTS], j->lmax, zh_buf);
+    bench_sink += zh_buf[1];
+}
+
+static void run_monomial_only(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) monomial_poly_zh(&j->geom[i % NPTS], j->lmax, zh_buf);
+    bench_sink += zh_buf[1];
+}
+
+static void run_monomial_full(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        shl__poly_geom_init(&j->geom[0], j->pts[i % NPTS], j->verts, j->n);
+        monomial_poly_zh(&j->geom[0], j->lmax, zh_buf);
+        shl__zh_to_sh(j->lmax, zh_buf, coef_buf);
+        bench_sink += coef_buf[1];
+    }
+}
+
+/* Seconds per evaluation (median of 7), with the inner count chosen for ~20 ms per repetition. */
+static double timed(void (*fn)(void *), job *j)
+{
+    j->inner = 1;
+    const double t0 = bench_now();
+    long n = 0;
+    while (bench_now() - t0 < 0.005) { fn(j); ++n; }
+    j->inner = (long)fmax(1.0, 0.02 * n / (bench_now() - t0));
+    return bench_run(fn, j, j->inner, 7).median;
+}
+
+static void setup(job *j, const shl_ctx *ctx, int n)
+{
+    j->ctx = ctx;
+    j->lmax = shl_ctx_lmax(ctx);
+    j->n = n;
+    for (int i = 0; i < n; ++i) { /* regular n-gon of radius 1 in the plane z = 2 */
+        j->verts[3 * i] = cos(2 * M_PI * i / n);
+        j->verts[3 * i + 1] = sin(2 * M_PI * i / n);
+        j->verts[3 * i + 2] = 2.0;
+    }
+    for (int k = 0; k < 3 * n; ++k) j->vf[k] = (float)j->verts[k];
+    srand(1);
+    for (int p = 0; p < NPTS; ++p) {
+        for (int k = 0; k < 3; ++k) j->pts[p][k] = 2.0 * rand() / RAND_MAX - 1.0;
+        for (int k = 0; k < 3; ++k) j->pf[p][k] = (float)j->pts[p][k];
+        shl__poly_geom_init(&j->geom[p], j->pts[p], j->verts, n);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_polygon.csv";
+    FILE *csv = fopen(csv_path, "w");
+    static job j;
+    bench_print_machine(stdout);
+    if (csv) fprintf(csv, "section,lmax,edges,ns_total,ns_zh,ns_rotation,ns_monomial_total\n");
+
+    printf("\n## Time per evaluation vs lmax (triangle light, double; Wang 2018 Fig. 6)\n\n");
+    printf("| lmax | coeffs | total ns | setup+ZH recurrence ns | rotation ns | ns/coeff |\n|---|---|---|---|---|---|\n");
+    const int lmaxes[] = {2, 4, 6, 8, 10, 12, 14, 18, 22, 26, 30};
+    double xs[16], ys[16];
+    int nl = 0;
+    for (unsigned i = 0; i < sizeof lmaxes / sizeof lmaxes[0]; ++i) {
+        shl_ctx *ctx;
+        shl_ctx_create(lmaxes[i], &ctx);
+        setup(&j, ctx, 3);
+        const double t = timed(run_full, &j), tz = timed(run_geom_zh, &j), tr = timed(run_rotation, &j);
+        const int nc = SHL_NCOEFFS(lmaxes[i]);
+        printf("| %d | %d | %.0f | %.0f | %.0f | %.1f |\n", lmaxes[i], nc, t * 1e9, tz * 1e9, tr * 1e9, t * 1e9 / nc);
+        if (csv) fprintf(csv, "lmax,%d,3,%.1f,%.1f,%.1f,\n", lmaxes[i], t * 1e9, tz * 1e9, tr * 1e9);
+        if (lmaxes[i] >= 4) { xs[nl] = nc; ys[nl] = t; ++nl; }
+        shl_ctx_destroy(ctx);
+    }
+    printf("\nFitted exponent of time vs coefficient count (lmax 4..30): %.2f "
+           "(1 = linear; the rotation is O(lmax^3) = coeffs^1.5 and takes over at high lmax)\n",
+           bench_loglog_slope(xs, ys, nl));
+
+    printf("\n## Time per evaluation vs edge count (lmax 8, double; Wang 2018 Fig. 7)\n\n| edges | total ns |\n|---|---|\n");
+    shl_ctx *ctx8;
+    shl_ctx_create(8, &ctx8);
+    int ne = 0;
+    for (int n = 3; n <= 32; n = n < 8 ? n + 1 : n * 2) {
+        setup(&j, ctx8, n);
+        const double t = timed(run_full, &j);
+        printf("| %d | %.0f |\n", n, t * 1e9);
+        if (csv) fprintf(csv, "edges,8,%d,%.1f,,,\n", n, t * 1e9);
+        xs[ne] = n;
+        ys[ne] = t;
+        ++ne;
+    }
+    printf("\nFitted exponent of time vs edges: %.2f (1 = linear)\n", bench_loglog_slope(xs, ys, ne));
+
+    printf("\n## ZH recurrence vs monomial-moment baseline (triangle; Wang 2018 Table 2)\n\n");
+    printf("| lmax | recurrence ns | monomial ns | monomial/recurrence time (ZH part) | same, full pipeline | max |ZH recurrence - monomial| |\n|---|---|---|---|---|---|\n");
+    const int cmp_l[4] = {8, 14, 20, 30};
+    for (int i = 0; i < 4; ++i) {
+        shl_ctx *ctx;
+        shl_ctx_create(cmp_l[i], &ctx);
+        setup(&j, ctx, 3);
+        const double tz = timed(run_zh_only, &j), tm = timed(run_monomial_only, &j);
+        const double tf = timed(run_full, &j), tmf = timed(run_monomial_full, &j);
+        static double za[(2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE], zb[(2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE];
+        double diff = 0;
+        for (int p = 0; p < NPTS; ++p) {
+            shl__poly_zh_d(&j.geom[p], cmp_l[i], za);
+            monomial_poly_zh(&j.geom[p], cmp_l[i], zb);
+            for (int d = 0; d < 2 * cmp_l[i] + 1; ++d)
+                for (int l = 0; l <= cmp_l[i]; ++l)
+                    diff = fmax(diff, fabs(za[d * SHL__ZH_STRIDE + l] - zb[d * SHL__ZH_STRIDE + l]));
+        }
+        printf("| %d | %.0f | %.0f | %.2fx | %.2fx | %.1e |\n", cmp_l[i], tz * 1e9, tm * 1e9, tm / tz, tmf / tf, diff);
+        if (csv) fprintf(csv, "monomial,%d,3,%.1f,%.1f,,%.1f\n", cmp_l[i], tf * 1e9, tz * 1e9, tmf * 1e9);
+        shl_ctx_destroy(ctx);
+    }
+
+    setup(&j, ctx8, 3);
+    const double td = timed(run_full, &j), tf = timed(run_full_f, &j);
+    printf("\n## Scalar throughput, one core, triangle, lmax 8\n\n");
+    printf("double: %.3g evaluations/s (%.0f ns); float path: %.3g evaluations/s (%.0f ns)\n",
+           1.0 / td, td * 1e9, 1.0 / tf, tf * 1e9);
+    if (csv) fprintf(csv, "throughput,8,3,%.1f,,,\n", td * 1e9);
+    shl_ctx_destroy(ctx8);
+    if (csv) fclose(csv);
+    printf("\n(checksum %g)\n", (double)bench_sink);
+    return 0;
+}

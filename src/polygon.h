@@ -1,0 +1,49 @@
+/* Per-polygon geometry shared by the coefficient and gradient kernels. */
+#ifndef SHL_POLYGON_H
+#define SHL_POLYGON_H
+
+#include "internal.h"
+
+/* A polygon as seen from the shading point x, oriented so that its solid
+ * angle is positive (counter-clockwise seen from outside the unit sphere
+ * around x).  Edge e joins vertex e and vertex (e+1) % n.  All in double. */
+typedef struct {
+    int n;                         /* vertices after dropping repeated ones; 0: sees nothing */
+    double rel[SHL_MAX_VERTS][3];  /* v_e - x */
+    double dist[SHL_MAX_VERTS];    /* |v_e - x| */
+    double w[SHL_MAX_VERTS][3];    /* omega_e, unit direction to vertex e */
+    double lam[SHL_MAX_VERTS][3];  /* lambda_e = mu_e x omega_e (Wang 2018 Eq. 16) */
+    double mu[SHL_MAX_VERTS][3];   /* mu_e, unit normal of the edge's great circle (Eq. 19) */
+    double gamma[SHL_MAX_VERTS];   /* arc angle of edge e (Eq. 20) */
+    double sin_gamma[SHL_MAX_VERTS], cos_gamma[SHL_MAX_VERTS];
+    double omc_gamma[SHL_MAX_VERTS]; /* 1 - cos(gamma) = 2 sin^2(gamma/2), no cancellation */
+    double dw[SHL_MAX_VERTS][3];     /* omega_{e+1} - omega_e, from vertex differences */
+    double solid_angle;            /* S_0 (Eq. 24), > 0 when n > 0 */
+    /* gradient terms (polygon_zh.h): 1/ell(t) = gvec_e . w(t) along edge e, and
+     * its t-derivative at the arc's ends */
+    double gvec[SHL_MAX_VERTS][3];
+    double fprime1[SHL_MAX_VERTS];   /* f'(gamma_e) */
+    double f_integral[SHL_MAX_VERTS]; /* I_0 = int_0^gamma f dt = f'(0) - f'(gamma) */
+} shl__poly_geom;
+
+/* Build the geometry; the caller has validated n and finiteness. */
+void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n);
+
+/* ZH integrals zh[d * SHL__ZH_STRIDE + l] = int_Q Y_l0(dir_d . w) dw for
+ * every lobe d < 2*lmax+1 of the shared lobe table and l <= lmax; the _grad
+ * versions also write d zh / d x_a at zh_grad[a * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l]. */
+void shl__poly_zh_d(const shl__poly_geom *g, int lmax, double *zh);
+void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
+void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
+
+/* Sparse ZH -> SH reconstruction (Wang 2018 Eq. 33) from the lobe table (zh_lobes.c);
+ * zh laid out as above. */
+void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
+/* Float ZH in, float SH out; accumulates in double. */
+void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
+
+#define SHL__ZH_STRIDE (SHL_LMAX_MAX + 1)
+#define SHL__ZH_BLOCK ((2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE)
+
+#endif

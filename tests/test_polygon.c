@@ -1,0 +1,368 @@
+/* Polygon SH coefficients (Wang 2018) against the independent quadrature
+ * reference of ref_quad.c, invariants, hard cases and bad input.
+ * Tolerances are relative to the solid angle (|L_lm| <= sqrt((2l+1)/4pi) * omega). */
+#include "geom.h"
+#include "harness.h"
+#include "internal.h"
+#include "ref_quad.h"
+#include "zh_tables.h"
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+
+enum { NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
+
+/* max |a - b| over bands 0..lmax */
+static double max_abs_diff(const double *a, const double *b, int lmax)
+{
+    double m = 0.0;
+    for (int k = 0; k < SHL_NCOEFFS(lmax); ++k) m = fmax(m, fabs(a[k] - b[k]));
+    return m;
+}
+
+/* Error of shl_polygon at ctx lmax against the reference, divided by the solid angle. */
+static double rel_error_vs_reference(const shl_ctx *ctx, const double x[3], const double *verts, int n)
+{
+    const int lmax = shl_ctx_lmax(ctx);
+    double got[NCMAX], want[NCMAX], omega;
+    CHECK(shl_polygon(ctx, x, verts, n, got) == SHL_OK);
+    CHECK(ref_polygon_sh(lmax, x, verts, n, want, NULL) == 0);
+    CHECK(shl_polygon_solid_angle(x, verts, n, &omega) == SHL_OK);
+    CHECK(all_finite(got, SHL_NCOEFFS(lmax)));
+    return max_abs_diff(got, want, lmax) / omega;
+}
+
+static void random_case(rng_t *r, int kind, double x[3], double *verts, int *n)
+{
+    double center[3], nrm[3];
+    for (int k = 0; k < 3; ++k) center[k] = rng_range(r, -1.0, 1.0);
+    rng_unit_vector(r, nrm);
+    *n = kind == 0 ? 3 : kind == 1 ? 4 : 6;
+    random_polygon(r, *n, kind == 2, center, nrm, rng_range(r, 0.3, 2.0), verts);
+    double off[3];
+    rng_unit_vector(r, off);
+    const double dist = rng_range(r, 0.5, 4.0), side = (off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]);
+    if (fabs(side) < 0.05) /* keep the random point clearly off the plane; near-plane points are hard cases */
+        for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
+    for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+}
+
+static void random_sweep(int lmax, double tol, int cases, unsigned seed)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+    rng_t r = {seed};
+    double worst[3] = {0, 0, 0};
+    for (int it = 0; it < cases; ++it) {
+        const int kind = it % 3;
+        double x[3], verts[18];
+        int n;
+        random_case(&r, kind, x, verts, &n);
+        const double e = rel_error_vs_reference(ctx, x, verts, n);
+        worst[kind] = fmax(worst[kind], e);
+        if (!(e <= tol)) harness_fail(__FILE__, __LINE__, "case %d kind %d: error/omega %.3g > %.3g, x = (%a, %a, %a)",
+                                      it, kind, e, tol, x[0], x[1], x[2]);
+    }
+    harness_note("lmax %d max error/omega: triangles %.2e, quads %.2e, concave hexagons %.2e (tol %.0e)",
+                 lmax, worst[0], worst[1], worst[2], tol);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(polygon_vs_reference_lmax14) { random_sweep(14, 1e-12, 60, 11); }
+SHL_TEST(polygon_vs_reference_lmax30) { random_sweep(SHL_LMAX_MAX, 1e-10, 30, 12); }
+
+SHL_TEST(polygon_float_vs_reference)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
+    rng_t r = {13};
+    double worst = 0.0;
+    for (int it = 0; it < 30; ++it) {
+        double x[3], verts[18], want[NCMAX], omega;
+        float xf[3], vf[18], got[NCMAX];
+        int n;
+        random_case(&r, it % 3, x, verts, &n);
+        for (int k = 0; k < 3 * n; ++k) vf[k] = (float)verts[k];
+        for (int k = 0; k < 3; ++k) xf[k] = (float)x[k];
+        /* compare against the reference for the float-rounded geometry */
+        for (int k = 0; k < 3 * n; ++k) verts[k] = vf[k];
+        for (int k = 0; k < 3; ++k) x[k] = xf[k];
+        CHECK(shl_polygon_solid_angle(x, verts, n, &omega) == SHL_OK);
+        if (omega < 0.05 * 0.05) continue; /* spec: polygons subtending more than 0.05 rad */
+        CHECK(shl_polygon_f(ctx, xf, vf, n, got) == SHL_OK);
+        CHECK(ref_polygon_sh(14, x, verts, n, want, NULL) == 0);
+        for (int k = 0; k < SHL_NCOEFFS(14); ++k) worst = fmax(worst, fabs(got[k] - want[k]) / omega);
+    }
+    CHECK(worst <= 2e-5);
+    harness_note("float lmax 14 max error/omega %.2e (tol 2e-5)", worst);
+    shl_ctx_destroy(ctx);
+}
+
+/* Float error vs angular size: a square of side s at distance 1 facing the point. */
+SHL_TEST(polygon_float_error_vs_angular_size)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
+    const double sizes[] = {1.0, 0.1, 0.01, 1e-3};
+    for (unsigned i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) {
+        const double s = sizes[i];
+        const float vf[12] = {0.3f, 0.2f, 1.0f, (float)(0.3 + s), 0.2f, 1.0f,
+                              (float)(0.3 + s), (float)(0.2 + s), 1.1f, 0.3f, (float)(0.2 + s), 1.1f};
+        const float xf[3] = {0.05f, -0.1f, 0.02f};
+        double v[12], x[3] = {xf[0], xf[1], xf[2]}, want[NCMAX], omega;
+        float got[NCMAX];
+        for (int k = 0; k < 12; ++k) v[k] = vf[k];
+        CHECK(shl_polygon_f(ctx, xf, vf, 4, got) == SHL_OK);
+        CHECK(ref_polygon_sh(14, x, v, 4, want, NULL) == 0);
+        CHECK(shl_polygon_solid_angle(x, v, 4, &omega) == SHL_OK);
+        double e = 0.0;
+        for (int k = 0; k < SHL_NCOEFFS(14); ++k) e = fmax(e, fabs(got[k] - want[k]) / omega);
+        harness_note("%.0e rad: %.1e", s, e);
+        if (s >= 0.05) CHECK(e <= 2e-5);
+        else CHECK(e <= 1e-3);
+    }
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(polygon_invariants)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK);
+    rng_t r = {14};
+    double worst_wind = 0, worst_add = 0, worst_rot = 0, worst_l0 = 0;
+    for (int it = 0; it < 40; ++it) {
+        double x[3], verts[18], rev[18], a[NCMAX], b[NCMAX], omega;
+        int n;
+        random_case(&r, it % 3, x, verts, &n);
+        CHECK(shl_polygon(ctx, x, verts, n, a) == SHL_OK);
+        CHECK(shl_polygon_solid_angle(x, verts, n, &omega) == SHL_OK);
+        /* winding independence */
+        for (int i = 0; i < n; ++i)
+            for (int k = 0; k < 3; ++k) rev[3 * i + k] = verts[3 * (n - 1 - i) + k];
+        CHECK(shl_polygon(ctx, x, rev, n, b) == SHL_OK);
+        worst_wind = fmax(worst_wind, max_abs_diff(a, b, SHL_LMAX_MAX) / omega);
+        /* l = 0 is the solid angle; the solid angle agrees with Van Oosterom-Strackee in the reference */
+        worst_l0 = fmax(worst_l0, fabs(a[0] - omega / (2.0 * sqrt(M_PI))) / omega);
+        worst_l0 = fmax(worst_l0, fabs(omega - ref_polygon_solid_angle(x, verts, n)) / omega);
+        /* additivity: a convex quad = two triangles */
+        if (n == 4) {
+            const double t1[9] = {verts[0], verts[1], verts[2], verts[3], verts[4], verts[5], verts[6], verts[7], verts[8]};
+            const double t2[9] = {verts[0], verts[1], verts[2], verts[6], verts[7], verts[8], verts[9], verts[10], verts[11]};
+            double c1[NCMAX], c2[NCMAX];
+            CHECK(shl_polygon(ctx, x, t1, 3, c1) == SHL_OK);
+            CHECK(shl_polygon(ctx, x, t2, 3, c2) == SHL_OK);
+            for (int k = 0; k < NCMAX; ++k) c1[k] += c2[k];
+            worst_add = fmax(worst_add, max_abs_diff(a, c1, 14) / omega);
+        }
+        /* per-band energy is invariant when the polygon rotates about x */
+        double axis[3], m[3][3], rot[18];
+        rng_unit_vector(&r, axis);
+        rotation_matrix(axis, rng_range(&r, 0.0, 2.0 * M_PI), m);
+        for (int i = 0; i < n; ++i) {
+            double p[3];
+            for (int k = 0; k < 3; ++k) p[k] = verts[3 * i + k] - x[k];
+            for (int k = 0; k < 3; ++k) rot[3 * i + k] = x[k] + m[k][0] * p[0] + m[k][1] * p[1] + m[k][2] * p[2];
+        }
+        CHECK(shl_polygon(ctx, x, rot, n, b) == SHL_OK);
+        for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
+            double ea = 0, eb = 0;
+            for (int mm = -l; mm <= l; ++mm) {
+                ea += a[l * (l + 1) + mm] * a[l * (l + 1) + mm];
+                eb += b[l * (l + 1) + mm] * b[l * (l + 1) + mm];
+            }
+            worst_rot = fmax(worst_rot, fabs(sqrt(ea) - sqrt(eb)) / omega);
+        }
+    }
+    CHECK(worst_wind <= 1e-13);
+    CHECK(worst_add <= 1e-13);
+    CHECK(worst_rot <= 1e-12);
+    CHECK(worst_l0 <= 1e-14);
+    harness_note("winding %.1e, additivity(l<=14) %.1e, band-energy rotation %.1e, l=0 %.1e (all /omega)",
+                 worst_wind, worst_add, worst_rot, worst_l0);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(polygon_prefix_consistency)
+{
+    shl_ctx *small, *big;
+    CHECK(shl_ctx_create(5, &small) == SHL_OK);
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &big) == SHL_OK);
+    const double v[9] = {-0.5, -0.2, 1.0, 0.7, -0.1, 1.2, 0.1, 0.8, 0.9}, x[3] = {0.1, 0.1, 0.0};
+    double a[36], b[NCMAX];
+    CHECK(shl_polygon(small, x, v, 3, a) == SHL_OK);
+    CHECK(shl_polygon(big, x, v, 3, b) == SHL_OK);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    shl_ctx_destroy(small);
+    shl_ctx_destroy(big);
+}
+
+/* ---- hard cases: each reports its measured error ---------------------- */
+
+/* Hard cases are checked against the forward-error bound of a backward-stable
+ * method: err <= tol * omega + 4 eps * scale * max|grad L|, where scale is the
+ * largest coordinate magnitude (a 1-ulp move of the point or a vertex) and
+ * grad L comes from shl_polygon_grad (checked against the reference in
+ * test_polygon_grad.c).  The second term only matters where the result is
+ * ill-conditioned: grazing slivers and points next to an edge. */
+static void hard_case(const char *what, int lmax, const double x[3], const double *v, int n, double tol)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+    static double got[NCMAX], want[NCMAX], grad[3 * NCMAX];
+    double omega, scale = fmax(fabs(x[0]), fmax(fabs(x[1]), fabs(x[2]))), gmax = 0.0;
+    for (int i = 0; i < 3 * n; ++i) scale = fmax(scale, fabs(v[i]));
+    CHECK(shl_polygon(ctx, x, v, n, got) == SHL_OK);
+    CHECK(shl_polygon_grad(ctx, x, v, n, want, grad) == SHL_OK);
+    for (int k = 0; k < 3 * SHL_NCOEFFS(lmax); ++k) gmax = fmax(gmax, fabs(grad[k]));
+    CHECK(ref_polygon_sh(lmax, x, v, n, want, NULL) == 0);
+    CHECK(shl_polygon_solid_angle(x, v, n, &omega) == SHL_OK);
+    CHECK(all_finite(got, SHL_NCOEFFS(lmax)));
+    const double err = max_abs_diff(got, want, lmax), cond = 4.0 * DBL_EPSILON * scale * gmax;
+    if (!(err <= tol * omega + cond))
+        harness_fail(__FILE__, __LINE__, "%s: error %.3g > %.3g * omega + %.3g", what, err, tol, cond);
+    harness_note("%s %.1e*omega (conditioning term %.1e*omega)", what, err / omega, cond / omega);
+    shl_ctx_destroy(ctx);
+}
+
+static const double unit_square[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+
+SHL_TEST(hard_point_just_above_plane)
+{
+    const double inside[3] = {0.3, 0.6, 1e-7}, outside[3] = {1.7, 0.4, 1e-7}, below[3] = {0.5, 0.5, -1e-7};
+    hard_case("inside footprint, h=1e-7 (l<=14)", 14, inside, unit_square, 4, 1e-12);
+    hard_case("outside footprint, grazing (l<=14)", 14, outside, unit_square, 4, 1e-12);
+    hard_case("below, h=-1e-7 (l<=30)", SHL_LMAX_MAX, below, unit_square, 4, 1e-10);
+}
+
+SHL_TEST(hard_point_in_plane)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK);
+    const double pts[5][3] = {{0.5, 0.5, 0}, {3, 0.5, 0}, {0.5, 0, 0}, {1, 1, 0}, {-2, -7, 0}};
+    for (int i = 0; i < 5; ++i) {
+        double c[NCMAX + 1], omega = -1.0;
+        guard_fill(c, NCMAX + 1);
+        CHECK(shl_polygon(ctx, pts[i], unit_square, 4, c) == SHL_OK);
+        for (int k = 0; k < NCMAX; ++k) CHECK(c[k] == 0.0);
+        CHECK(c[NCMAX] == GUARD_VALUE);
+        CHECK(shl_polygon_solid_angle(pts[i], unit_square, 4, &omega) == SHL_OK && omega == 0.0);
+    }
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(hard_tiny_and_huge_polygons)
+{
+    const double s = 1e-4;
+    const double tiny[12] = {0, 0, 10, s, 0, 10, s, s, 10, 0, s, 10}, x0[3] = {0.3, -0.2, 0.0};
+    hard_case("tiny (1e-4 at distance 10, l<=14)", 14, x0, tiny, 4, 1e-9);
+    hard_case("tiny (l<=30)", SHL_LMAX_MAX, x0, tiny, 4, 1e-8);
+    const double h = 1e4;
+    const double huge[12] = {-h / 2, -h / 2, 1, h / 2, -h / 2, 1, h / 2, h / 2, 1, -h / 2, h / 2, 1}, xh[3] = {0.3, 0.1, 0};
+    hard_case("huge (1e4 at distance 1, l<=14)", 14, xh, huge, 4, 1e-12);
+    hard_case("huge (l<=30)", SHL_LMAX_MAX, xh, huge, 4, 1e-10);
+}
+
+SHL_TEST(hard_repeated_and_collinear_vertices)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK);
+    const double x[3] = {0.2, 0.3, 0.8};
+    const double messy[24] = {0, 0, 0, 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0, 1, 0, 0, 0, 0};
+    double a[NCMAX], b[NCMAX], omega;
+    CHECK(shl_polygon(ctx, x, messy, 8, a) == SHL_OK);
+    CHECK(shl_polygon(ctx, x, unit_square, 4, b) == SHL_OK);
+    CHECK(all_finite(a, NCMAX));
+    CHECK(shl_polygon_solid_angle(x, unit_square, 4, &omega) == SHL_OK);
+    const double e = max_abs_diff(a, b, SHL_LMAX_MAX) / omega;
+    CHECK(e <= 1e-13);
+    harness_note("repeated+collinear vs clean square %.1e", e);
+    /* all vertices equal, or only two distinct: nothing to see */
+    const double point[9] = {1, 2, 3, 1, 2, 3, 1, 2, 3}, segment[12] = {0, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1};
+    CHECK(shl_polygon(ctx, x, point, 3, a) == SHL_OK && a[0] == 0.0);
+    CHECK(shl_polygon(ctx, x, segment, 4, a) == SHL_OK && a[0] == 0.0 && all_finite(a, NCMAX));
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(hard_edge_plane_through_lobe)
+{
+    /* For several lobe directions d of the shared table, an edge whose great
+     * circle contains d (c_e = 0 for that lobe, Wang 2018 Eq. 20). */
+    const double x[3] = {0, 0, 0};
+    const int lobes[4] = {0, 1, 8, 2 * SHL_LMAX_MAX};
+    for (int i = 0; i < 4; ++i) {
+        const double *d = shl__zh_dir[lobes[i]];
+        double u[3], w[3];
+        plane_basis(d, u, w); /* u, w orthogonal to d */
+        /* vertices p0 = 2(d + 0.3u), p1 = 1.5(d - 0.4u): the edge plane contains d */
+        double v[9];
+        for (int k = 0; k < 3; ++k) {
+            v[k] = 2.0 * (d[k] + 0.3 * u[k]);
+            v[3 + k] = 1.5 * (d[k] - 0.4 * u[k]);
+            v[6 + k] = 1.8 * (d[k] + 0.5 * w[k]);
+        }
+        char what[64];
+        snprintf(what, sizeof what, "lobe %d", lobes[i]);
+        hard_case(what, SHL_LMAX_MAX, x, v, 3, 1e-10);
+    }
+}
+
+SHL_TEST(hard_edge_subtending_nearly_pi)
+{
+    /* the point sits 1e-7 from the middle of an edge, off the plane: that edge's arc is ~pi */
+    const double x[3] = {0.5, -1e-7 / M_SQRT2, 1e-7 / M_SQRT2};
+    hard_case("edge arc ~pi (l<=14)", 14, x, unit_square, 4, 1e-12);
+    hard_case("edge arc ~pi (l<=30)", SHL_LMAX_MAX, x, unit_square, 4, 1e-10);
+}
+
+SHL_TEST(hard_lmax_max_concave)
+{
+    const double star[18] = {1, 0, 2, 0.2, 0.3, 2, 0, 1, 2, -0.3, 0.1, 2, -1, -1, 2, 0.1, -0.2, 2};
+    const double x[3] = {0.1, 0.2, 0.5};
+    hard_case("concave hexagon l=SHL_LMAX_MAX", SHL_LMAX_MAX, x, star, 6, 1e-10);
+}
+
+SHL_TEST(polygon_bad_input)
+{
+    shl_ctx *ctx = NULL;
+    CHECK(shl_ctx_create(-1, &ctx) == SHL_ELMAX && ctx == NULL);
+    CHECK(shl_ctx_create(SHL_LMAX_MAX + 1, &ctx) == SHL_ELMAX && ctx == NULL);
+    CHECK(shl_ctx_create(4, NULL) == SHL_ENULL);
+    CHECK(shl_ctx_create(4, &ctx) == SHL_OK);
+    CHECK(shl_ctx_lmax(ctx) == 4 && shl_ctx_lmax(NULL) == SHL_ENULL);
+    const double x[3] = {0, 0, 1};
+    double c[26], big[3 * (SHL_MAX_VERTS + 1)], omega = GUARD_VALUE;
+    float cf[26];
+    for (int i = 0; i < SHL_MAX_VERTS + 1; ++i) {
+        big[3 * i] = cos(i * 0.1);
+        big[3 * i + 1] = sin(i * 0.1);
+        big[3 * i + 2] = 0;
+    }
+    guard_fill(c, 26);
+    CHECK(shl_polygon(NULL, x, unit_square, 4, c) == SHL_ENULL);
+    CHECK(shl_polygon(ctx, NULL, unit_square, 4, c) == SHL_ENULL);
+    CHECK(shl_polygon(ctx, x, NULL, 4, c) == SHL_ENULL);
+    CHECK(shl_polygon(ctx, x, unit_square, 4, NULL) == SHL_ENULL);
+    CHECK(shl_polygon(ctx, x, unit_square, 2, c) == SHL_ENVERTS);
+    CHECK(shl_polygon(ctx, x, big, SHL_MAX_VERTS + 1, c) == SHL_ENVERTS);
+    const double bad_vals[3] = {NAN, INFINITY, -INFINITY};
+    for (int i = 0; i < 3; ++i) {
+        double v[12], xb[3] = {0, 0, 1};
+        memcpy(v, unit_square, sizeof v);
+        v[7] = bad_vals[i];
+        CHECK(shl_polygon(ctx, x, v, 4, c) == SHL_ENONFINITE);
+        xb[1] = bad_vals[i];
+        CHECK(shl_polygon(ctx, xb, unit_square, 4, c) == SHL_ENONFINITE);
+        CHECK(shl_polygon_solid_angle(xb, unit_square, 4, &omega) == SHL_ENONFINITE);
+    }
+    CHECK(guard_intact(c, 26) && omega == GUARD_VALUE);
+    const float xf[3] = {0, 0, 1}, vf[12] = {0, 0, 0, 1, 0, 0, 1, NAN, 0, 0, 1, 0};
+    for (int i = 0; i < 26; ++i) cf[i] = 7.0f;
+    CHECK(shl_polygon_f(ctx, xf, vf, 4, cf) == SHL_ENONFINITE);
+    CHECK(shl_polygon_f(ctx, xf, vf, 1, cf) == SHL_ENVERTS);
+    CHECK(shl_polygon_f(ctx, NULL, vf, 4, cf) == SHL_ENULL);
+    for (int i = 0; i < 26; ++i) CHECK(cf[i] == 7.0f);
+    /* n = SHL_MAX_VERTS is accepted */
+    CHECK(shl_polygon(ctx, x, big, SHL_MAX_VERTS, c) == SHL_OK && all_finite(c, 25));
+    shl_ctx_destroy(ctx);
+    shl_ctx_destroy(NULL);
+}
