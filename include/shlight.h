@@ -93,6 +93,337 @@ int shl_polygon_grad_f(const shl_ctx *ctx, const float x[3], const float *verts,
 /** Solid angle (steradians, >= 0) of the polygon seen from x; 0 in its plane. */
 int shl_polygon_solid_angle(const double x[3], const double *verts, int n, double *omega);
 
+/* ---- light sets (Wu et al. 2020, Alg. 1) ------------------------------- */
+/**
+ * A set of lights with RGB radiance; contributions add linearly.  Evaluation
+ * only reads the set (share it across threads); adding is not thread-safe.
+ */
+typedef struct shl_lights shl_lights;
+
+/** Create an empty light set. */
+int shl_lights_create(shl_lights **out);
+/** Destroy a light set (NULL is accepted and ignored). */
+void shl_lights_destroy(shl_lights *lights);
+/**
+ * Add (copy) a uniform polygon light: verts and n as for shl_polygon, rgb[3]
+ * finite radiance per colour channel (any sign).  two_sided = 1: emits on both
+ * sides.  two_sided = 0: emits only toward its front, the side from which the
+ * vertices appear counter-clockwise, i.e. toward the Newell normal
+ * n = sum_i (v_i - v_0) x (v_i+1 - v_0) (a triangle: (v1 - v0) x (v2 - v0));
+ * x receives light only if n . (x - v_0) > 0 (on or behind the plane: nothing).
+ * two_sided other than 0/1: SHL_EDOMAIN.  On error the set is unchanged.
+ */
+int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const double rgb[3],
+                           int two_sided);
+/** Number of lights in the set, or SHL_ENULL. */
+int shl_lights_count(const shl_lights *lights);
+/**
+ * RGB SH coefficients of the whole set at x, nc = SHL_NCOEFFS(shl_ctx_lmax(ctx)):
+ *   rgb[c*nc + k]        = sum over lights of rgb_c * coeffs[k]        (3*nc entries, c = 0,1,2),
+ *   grad[(c*3 + a)*nc + k] = d rgb[c*nc + k] / d x[a]                    (9*nc entries; NULL: skipped).
+ * A workspace is allocated per call (SHL_ENOMEM).
+ */
+int shl_lights_eval(const shl_ctx *ctx, const shl_lights *lights, const double x[3], double *rgb,
+                    double *grad);
+/** shl_lights_eval at npts >= 0 points pts[3*p .. 3*p+2]: point p writes rgb + 3*nc*p and
+ *  (if grad != NULL) grad + 9*nc*p.  All points are checked before anything is written. */
+int shl_lights_eval_batch(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts,
+                          double *rgb, double *grad);
+
+/* ---- SH grids and interpolation (Wu 2020 Alg. 1 and 4; Annen 2004) ---- */
+/**
+ * A regular grid of res[0] x res[1] x res[2] nodes spanning the box [lo, hi]
+ * (node (i,j,k) at lo + (i,j,k) * (hi - lo) / (res - 1)), storing at every node
+ * the RGB coefficients and their gradients, in the layouts of shl_lights_eval.
+ * Filling writes nodes; interpolation only reads (share it across threads).
+ */
+typedef struct shl_grid shl_grid;
+
+#define SHL_GRID_FLOAT  0   /* node storage: float (default) */
+#define SHL_GRID_DOUBLE 1   /* node storage: double */
+/** Largest node count per axis. */
+#define SHL_GRID_RES_MAX 1024
+/** Largest thread count of the threaded entry points. */
+#define SHL_MAX_THREADS 256
+
+/** Bytes per grid node: 3 colours x (value + 3 gradient components) x nc x
+ *  sizeof(float or double); e.g. lmax 4, float: 1200 bytes. */
+int shl_grid_bytes_per_node(int lmax, int storage, int *bytes);
+/**
+ * Create a zero-filled grid for bands 0..shl_ctx_lmax(ctx).  Needs lo[a] < hi[a]
+ * (finite) and 2 <= res[a] <= SHL_GRID_RES_MAX, storage SHL_GRID_FLOAT or
+ * SHL_GRID_DOUBLE (else SHL_EDOMAIN).  Memory: nodes x shl_grid_bytes_per_node.
+ */
+int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3],
+                    int storage, shl_grid **out);
+/** Destroy a grid (NULL is accepted and ignored). */
+void shl_grid_destroy(shl_grid *grid);
+/** Position of node idx = (i, j, k), 0 <= idx[a] < res[a] (else SHL_EDOMAIN). */
+int shl_grid_node_position(const shl_grid *grid, const int idx[3], double pos[3]);
+/** Read node idx: rgb[3*nc] and (if grad != NULL) grad[9*nc], layouts of shl_lights_eval. */
+int shl_grid_get_node(const shl_grid *grid, const int idx[3], double *rgb, double *grad);
+/** Write node idx from rgb[3*nc] and grad[9*nc] (finite; rounded to float storage). */
+int shl_grid_set_node(shl_grid *grid, const int idx[3], const double *rgb, const double *grad);
+/**
+ * Set every node to shl_lights_eval of the light set at its position (Wu 2020
+ * Alg. 1 lines 2-8), on 1 <= nthreads <= SHL_MAX_THREADS threads (1: the calling
+ * thread only, no thread is created); the result does not depend on nthreads.
+ * SHL_ETHREAD if a thread cannot be created (the grid is then unchanged).
+ */
+int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
+
+#define SHL_INTERP_TRILINEAR 0  /* values only */
+#define SHL_INTERP_TAYLOR    1  /* Annen 2004 Eq. (15)-(16): first-order Taylor from the 8 corners, inverse-distance^b weights */
+#define SHL_INTERP_HERMITE   2  /* Wu 2020 Alg. 4: tricubic Hermite (x, then y, then z), gradients carried linearly */
+/**
+ * Interpolate the grid's RGB coefficients at npts >= 0 points pts[3*p .. 3*p+2]
+ * into rgb + 3*nc*p (layout rgb[c*nc + k]), with the cell's 8 corner nodes.
+ * Points outside the box are clamped to it (each coordinate to [lo[a], hi[a]]):
+ * they get the value at the nearest point of the box, never an extrapolation.
+ * taylor_b: the exponent b of SHL_INTERP_TAYLOR (finite, > 0; ignored otherwise).
+ * 1 <= nthreads <= SHL_MAX_THREADS as for shl_grid_fill; results do not depend on it.
+ * Exactness: trilinear reproduces trilinear fields; Taylor reproduces linear fields
+ * (with exact node gradients); Hermite reproduces node values and every field whose
+ * monomials x^i y^j z^k (i, j, k <= 3) satisfy: i >= 2 => j = k = 0, j >= 2 => k = 0
+ * (e.g. any cubic in one variable, xyz, x y^3, x y z^3, but not x^2 y).
+ */
+int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
+                    double *rgb, int nthreads);
+
+/* ---- spherical lights (Mezieres et al. 2022, "HVL", Sec. 4.2) ---------- */
+/**
+ * SH projection of a uniform, unit-radiance sphere seen from x:
+ *   coeffs[l*(l+1)+m] = integral over the cap of directions subtended by the
+ *   sphere (center, radius) at x of Y_lm(w) dw,   l <= shl_ctx_lmax(ctx).
+ * The cap has half-angle a, sin a = radius / |center - x|.  Its ZH coefficients
+ * (HVL Eq. 14) are evaluated in a form without cancellation, so tiny or distant
+ * spheres keep full relative accuracy, then rotated to the axis (Eq. 15).
+ * A point inside or on the sphere (|center - x| <= radius) is surrounded by it:
+ * coeffs[0] = sqrt(4 pi) and every other coefficient is 0.
+ * radius must be finite (SHL_ENONFINITE) and > 0 (SHL_EDOMAIN).
+ */
+int shl_sphere(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+               double *coeffs);
+/** Float version: the geometry is set up in double, the band recurrences run in float. */
+int shl_sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                 float *coeffs);
+/**
+ * Coefficients (as shl_sphere) and their gradient with respect to the shading
+ * point: grad[a*nc + k] = d coeffs[k] / d x[a], a = 0,1,2, nc = SHL_NCOEFFS(lmax);
+ * grad has 3*nc entries.  Outside the sphere the gradient is analytic; it grows
+ * like 1/sqrt(|center - x| - radius) as x approaches the surface.  Inside or on
+ * the sphere the coefficients are constant and grad is 0.
+ */
+int shl_sphere_grad(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                    double *coeffs, double *grad);
+int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                      float *coeffs, float *grad);
+
+/* ---- zonal harmonics (ZH) and SH operations ----------------------------- */
+/*
+ * A ZH vector zh[0..lmax] (lmax+1 entries) describes a function circularly
+ * symmetric about an axis u:  f(w) = sum_l zh[l] K_l P_l(u . w),
+ * K_l = sqrt((2l+1)/(4 pi)), i.e. zh[l] is the coefficient of Y_l0 in a frame
+ * whose z axis is u.  SH vectors have SHL_NCOEFFS(lmax) entries.
+ */
+
+/** ZH of the indicator of the cap {w : u . w >= cos a}, 0 <= half_angle a <= pi
+ *  (HVL Eq. 14), with full relative accuracy for small a. */
+int shl_zh_cap(int lmax, double half_angle, double *zh);
+
+/** SH coefficients of the ZH function zh about axis (HVL Eq. 15):
+ *  sh[l*(l+1)+m] = sqrt(4 pi/(2l+1)) zh[l] Y_lm(axis/|axis|); axis finite, non-zero. */
+int shl_zh_to_sh(int lmax, const double *zh, const double axis[3], double *sh);
+
+/**
+ * Rotate an SH vector: out describes g(w) = f(R^T w), f described by in (a lobe
+ * of f at direction v moves to R v; rotating by R1 then by R2 equals rotating by
+ * R2 R1).  rot: row-major 3x3 orthogonal matrix, max |R R^T - I| <= 1e-6
+ * (SHL_EDOMAIN otherwise); det = -1 (a reflection) is allowed.  O(lmax^3)
+ * (Ivanic-Ruedenberg recurrences); out may equal in.  Allocates
+ * 8 (lmax+1)(2 lmax+1)(2 lmax+3)/3 bytes (SHL_ENOMEM).
+ */
+int shl_sh_rotate(int lmax, const double rot[9], const double *in, double *out);
+
+/** *value = sum_k coeffs[k] Y_k(dir) (HVL Eq. 6); dir finite, non-zero. */
+int shl_sh_eval(int lmax, const double *coeffs, const double dir[3], double *value);
+
+/**
+ * Convolution with a circularly symmetric kernel k(w . n) given by its ZH:
+ * out describes g(n) = integral f(w) k(w . n) dw, f described by sh:
+ *   out[l*(l+1)+m] = sqrt(4 pi/(2l+1)) kernel_zh[l] sh[l*(l+1)+m].
+ * O(lmax^2); out may equal sh.
+ */
+int shl_sh_convolve(int lmax, const double *sh, const double *kernel_zh, double *out);
+
+/**
+ * The same convolution when f is circularly symmetric too (ZH zh about axis u),
+ * evaluated at n in O(lmax) (HVL Sec. 6.3):
+ *   *value = integral f(w) k(w . n) dw = sum_l zh[l] kernel_zh[l] P_l(cos_angle),
+ * cos_angle = u . n, |cos_angle| <= 1 (SHL_EDOMAIN).  With the clamped cosine
+ * and lmax = 2 this is the 2x2 irradiance form of HVL App. B.
+ */
+int shl_zh_convolve(int lmax, const double *zh, const double *kernel_zh, double cos_angle,
+                    double *value);
+
+/** Kernel k(t) = max(t, 0): convolving radiance with it gives irradiance. */
+int shl_zh_clamped_cosine(int lmax, double *zh);
+/** Normalized Phong lobe k(t) = (n+1)/(2 pi) max(t, 0)^n (integral 1), any real
+ *  0 <= n <= 1e6; exact (ratio recurrence, no quadrature). */
+int shl_zh_phong(int lmax, double exponent, double *zh);
+/**
+ * GGX lobe: the density of mirror directions of GGX microfacets at normal
+ * incidence, k(t) = D(h)/4 with cos^2 theta_h = (1+t)/2 and
+ * D = alpha^2 / (pi (cos^2 theta_h (alpha^2 - 1) + 1)^2) (integral 1): the usual
+ * circularly symmetric stand-in for a GGX specular lobe about the mirror
+ * direction.  1e-3 <= alpha <= 1.  Projected by Gauss-Legendre quadrature on
+ * panels graded towards the peak (relative accuracy ~1e-14).
+ */
+int shl_zh_ggx(int lmax, double alpha, double *zh);
+
+/* ---- isotropic BRDF SH tables (HVL Sec. 4.2, Eq. 16-18) -------------------- */
+#define SHL_BRDF_GGX   1 /* kd/pi + ks D G2 F / (4 cos_i cos_o): GGX D, height-correlated
+                            Smith G2, Schlick Fresnel F with reflectance f0 */
+#define SHL_BRDF_PHONG 2 /* kd/pi + ks (n+2)/(2 pi) max(0, r . wi)^n, r = mirror of wo */
+
+/** Parametric isotropic BRDF (local frame: z = normal). */
+typedef struct {
+    int model;       /* SHL_BRDF_GGX or SHL_BRDF_PHONG                      */
+    double kd;       /* diffuse albedo, >= 0                                */
+    double ks;       /* specular weight, >= 0                               */
+    double alpha;    /* GGX roughness, 1e-3 <= alpha <= 1 (GGX only)        */
+    double f0;       /* GGX Fresnel reflectance at normal incidence, 0..1   */
+    double exponent; /* Phong exponent, 0 <= n <= 1e6 (Phong only)          */
+} shl_brdf;
+
+/** *value = f_s(wi, wo) in the local frame (z = normal; wi, wo finite, non-zero,
+ *  normalized here); 0 unless both are strictly above the horizon. */
+int shl_brdf_eval(const shl_brdf *brdf, const double wi[3], const double wo[3], double *value);
+
+/** Opaque table of BRDF SH projections; immutable after creation, share freely. */
+typedef struct shl_brdf_table shl_brdf_table;
+
+/**
+ * Tabulate, for the ntheta outgoing angles theta_j = j (pi/2) / ntheta
+ * (j = 0..ntheta-1; one degree apart for the paper's ntheta = 90) and phi_o = 0
+ * (Eq. 17-18), the SH projections over wi (local frame) of
+ *   F  = cos(theta_i) f_s(wi, wo)  (Eq. 16)   and   F' = f_s(wi, wo),
+ * bands 0..lmax.  2 <= ntheta <= 1024 (SHL_EDOMAIN).  By the symmetry of an
+ * isotropic BRDF the m < 0 coefficients are 0.  Quadrature in a frame about the
+ * mirror direction (Gauss-Legendre panels graded towards the lobe, horizon
+ * clipped exactly), then an SH rotation.  Stores 16 ntheta (lmax+1)^2 bytes.
+ */
+int shl_brdf_table_create(int lmax, const shl_brdf *brdf, int ntheta, shl_brdf_table **out);
+/** Destroy a table (NULL is accepted and ignored). */
+void shl_brdf_table_destroy(shl_brdf_table *table);
+/** Highest band of the table, or SHL_ENULL. */
+int shl_brdf_table_lmax(const shl_brdf_table *table);
+
+/**
+ * Local shading frame of HVL Sec. 4.2 (phi_o = 0): rows of frame (row-major 3x3)
+ * are the local x, y, z axes in world coordinates: z = n/|n|, x = the part of wo
+ * orthogonal to n, normalized (any unit vector orthogonal to n if wo is parallel
+ * to n), y = z cross x.  A world direction v has local coordinates frame v.
+ * n and wo finite and non-zero.
+ */
+int shl_brdf_frame(const double n[3], const double wo[3], double frame[9]);
+
+/**
+ * F and F' for the outgoing direction wo at a point of normal n, in the local
+ * frame (written to frame, as shl_brdf_frame): the frame change of HVL Sec. 4.2
+ * replaces an SH rotation (express the light in the frame, e.g. with
+ * shl_zh_to_sh(.., frame * axis, ..), then dot with F).  theta_o = angle(n, wo);
+ * linear interpolation between the tabulated angles, the last one held up to
+ * pi/2; wo at or below the horizon gives zero vectors.  f_cos (F) and f (F')
+ * have SHL_NCOEFFS(lmax) entries; either may be NULL.
+ */
+int shl_brdf_table_lookup(const shl_brdf_table *table, const double n[3], const double wo[3],
+                          double frame[9], double *f_cos, double *f);
+
+/* ---- Harmonics Virtual Lights (HVL Sec. 5) --------------------------------- */
+/** One HVL: a spherical secondary light on a surface, lit by a primary light. */
+typedef struct {
+    double pos[3];      /* y_j: centre                                            */
+    double normal[3];   /* n_j: normal of the surface at y_j (non-zero)            */
+    double to_light[3]; /* w_l: direction from y_j to the primary light (non-zero) */
+    double radius;      /* r_j > 0                                                 */
+    double power;       /* Phi_j, finite                                           */
+    const shl_brdf_table *brdf; /* material at y_j: F' gives the emission (Eq. 20)  */
+} shl_hvl;
+
+/**
+ * Overlap factor H of HVL Eq. 22: smoothstep approximation (Oat & Sander 2007)
+ * of the fraction of a cap of half-angle a (0 <= a <= pi/2) whose axis makes
+ * the angle acos(cos_theta) with the normal that lies above the horizon:
+ *   H = S((a + pi/2 - clamp(theta, pi/2 - a, pi/2 + a)) / (2a)),  S(x) = 3x^2 - 2x^3.
+ * (The paper prints the lower clamp bound as a - pi/2; pi/2 - a is the bound
+ * that keeps the argument of S in [0, 1].)  H = 1 or 0 (step) when a = 0.
+ */
+int shl_hvl_overlap(double cos_theta, double half_angle, double *h);
+
+/**
+ * Radiance leaving x (normal n, material table) towards wo, summed over the
+ * HVLs (HVL Eq. 1, 19-22):  sum_j L_j * (L . F), with L the SH vector of the cap
+ * subtended by HVL j at x (in the local frame of x, bands of material), F the
+ * material's F at wo, and L_j = Phi_j (F'_j . Y(-w_j)) G_j (Eq. 20), F'_j the
+ * HVL's own table looked up with its normal and w_l, evaluated towards x, and
+ * G_j = max(0, n_j . -w_j) H(n . w_j, a_j) / (pi r_j^2) (Eq. 21).  The emission
+ * is not clamped (SH ringing can make it negative, as in the paper).  When x is
+ * inside or on an HVL's sphere its cap is clamped to the hemisphere about w_j
+ * (the limit from outside); an HVL centred exactly at x contributes 0.
+ * count >= 0 (hvls may be NULL when count is 0).
+ */
+int shl_hvl_shade(const shl_hvl *hvls, int count, const double x[3], const double n[3],
+                  const double wo[3], const shl_brdf_table *material, double *radiance);
+
+/**
+ * Radius heuristic 1 (HVL Eq. 23) for the width x height HVLs of a reflective
+ * shadow map (row-major; pos 3 doubles per HVL, dist = distance to the primary
+ * light): radius[i] = scale * sum_n w_n |p_i - p_n| / sum_n w_n over the
+ * 8-connected neighbours n, w_n = 1 / (|d_i - d_n| + eps).  eps > 0, scale > 0,
+ * width, height >= 1, width * height >= 2.
+ */
+int shl_hvl_radius_grid(int width, int height, const double *pos, const double *dist, double eps,
+                        double scale, double *radius);
+
+/**
+ * Radius heuristic 2 (HVL Eq. 24, 26) for count HVLs distributed by a square
+ * RSM of full field-of-view angle fov (0 < fov < pi):
+ * gamma = sqrt(2) fov / sqrt(count), radius[i] = scale * dist[i] (gamma + gamma^3/3)
+ * (the Taylor form of dist tan gamma, Eq. 25; within 0.01 dist for gamma <= 0.58).
+ * dist[i] >= 0, scale > 0, count >= 1.
+ */
+int shl_hvl_radius_fov(int count, const double *dist, double fov, double scale, double *radius);
+
+/* ---- batched evaluation, SIMD dispatch ---------------------------------- */
+/**
+ * shl_polygon_f / shl_polygon_grad_f of one polygon at npts >= 0 points
+ * pts[3*p .. 3*p+2], vectorized across points (AVX2: 8 points per vector,
+ * NEON: 4):  point p writes coeffs + nc*p (nc entries) and, if grad != NULL,
+ * grad + 3*nc*p (3*nc entries, layout of shl_polygon_grad_f), nc = SHL_NCOEFFS(lmax).
+ * Same semantics as the single-point calls (either winding, repeated vertices
+ * dropped, a point in the polygon's plane gets zeros), with two limits of the
+ * all-float geometry: a point farther than 2^40 times the polygon's extent
+ * from every vertex gets zeros, and the plane test is the double one of
+ * shl_polygon_f.  pts and coeffs may be NULL when npts is 0.  All points are
+ * checked before anything is written.  Allocates a workspace per call of
+ * about 4 (lmax+1)^2 (3 lmax + 4) vlen bytes with gradients, a quarter of
+ * that without (SHL_ENOMEM); npts < 0: SHL_EDOMAIN.
+ */
+int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
+                        float *coeffs, float *grad);
+
+/**
+ * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with
+ * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
+ * Chosen at shl_ctx_create: the best one compiled in and supported, unless the
+ * environment variable SHLIGHT_ISA names another compiled-in, supported one
+ * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.
+ */
+const char *shl_ctx_isa(const shl_ctx *ctx);
+/** Build description: version, compiler, flags, batch ISAs compiled in (never NULL). */
+const char *shl_build_info(void);
+
 #ifdef __cplusplus
 }
 #endif

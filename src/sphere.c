@@ -1,0 +1,106 @@
+/* Spherical lights (Mezieres et al. 2022, HVL Sec. 4.2): the SH projection of
+ * the cap subtended by a sphere, its gradient, and the public entry points.
+ * The kernels are in sphere_impl.h, instantiated for double and float. */
+#include "sh_ops.h"
+
+#define REAL double
+#define SUFFIX(name) name##_d
+#include "sphere_impl.h"
+#undef REAL
+#undef SUFFIX
+
+#define REAL float
+#define SUFFIX(name) name##_f
+#include "sphere_impl.h"
+#undef REAL
+#undef SUFFIX
+
+void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
+                           double radius)
+{
+    const double v[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    const double big = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    g->inside = 1;
+    if (!(big > 0.0)) return;
+    /* distances in units of big: no overflow or underflow in the norm */
+    const double vs[3] = {v[0] / big, v[1] / big, v[2] / big};
+    const double ds = sqrt(shl__dot3(vs, vs)), rs = radius / big;
+    if (ds <= rs) return;
+    g->inside = 0;
+    for (int k = 0; k < 3; ++k) g->u[k] = vs[k] / ds;
+    const double s = rs / ds;                          /* sin a */
+    g->s2 = s * s;
+    g->c = sqrt((ds - rs) * (ds + rs)) / ds;           /* cos a, exact difference ds - rs */
+    g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
+    g->inv_d = 1.0 / (big * ds);
+    g->k_alpha = g->s2 / g->c * g->inv_d;              /* d cos a / dd = sin^2 a / (d cos a) */
+}
+
+static int check_radius(double radius)
+{
+    if (!isfinite(radius)) return SHL_ENONFINITE;
+    return radius > 0.0 ? SHL_OK : SHL_EDOMAIN;
+}
+
+static int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                    double *coeffs, double *grad, int want_grad)
+{
+    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
+    if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
+    const int st = check_radius(radius);
+    if (st) return st;
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, x, center, radius);
+    shl__sphere_sh_d(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    return SHL_OK;
+}
+
+static int sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                    float *coeffs, float *grad, int want_grad)
+{
+    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
+    if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
+    const int st = check_radius(radius);
+    if (st) return st;
+    const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, xd, cd, radius);
+    shl__sphere_sh_f(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    return SHL_OK;
+}
+
+int shl_sphere(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+               double *coeffs)
+{
+    return sphere_d(ctx, x, center, radius, coeffs, NULL, 0);
+}
+
+int shl_sphere_grad(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                    double *coeffs, double *grad)
+{
+    return sphere_d(ctx, x, center, radius, coeffs, grad, 1);
+}
+
+int shl_sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                 float *coeffs)
+{
+    return sphere_f(ctx, x, center, radius, coeffs, NULL, 0);
+}
+
+int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                      float *coeffs, float *grad)
+{
+    return sphere_f(ctx, x, center, radius, coeffs, grad, 1);
+}
+
+int shl_zh_cap(int lmax, double half_angle, double *zh)
+{
+    if (!zh) return SHL_ENULL;
+    if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
+    if (!isfinite(half_angle)) return SHL_ENONFINITE;
+    if (half_angle < 0.0 || half_angle > M_PI) return SHL_EDOMAIN;
+    const double sh = sin(0.5 * half_angle), s = sin(half_angle);
+    shl__cap_weights_d(lmax, 2.0 * sh * sh, s * s, cos(half_angle), zh, NULL);
+    for (int l = 0; l <= lmax; ++l) zh[l] *= sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* HVL Eq. (14) */
+    return SHL_OK;
+}

@@ -1,0 +1,387 @@
+/* Spherical lights: coefficients and gradients against the independent cap
+ * quadrature (capref.c), tiny / distant / tangent / inside spheres, float
+ * paths, the analytic SH gradient, bad input. */
+#include "capref.h"
+#include "harness.h"
+#include "sh_ops.h"
+#include "testutil.h"
+#include <math.h>
+
+enum { L = SHL_LMAX_MAX, NC = SHL_NCOEFFS(SHL_LMAX_MAX) };
+
+/* max |got - want| / max |want| */
+static double rel_err(const double *got, const double *want, int n)
+{
+    double e = 0.0, m = 0.0;
+    for (int k = 0; k < n; ++k) {
+        e = fmax(e, fabs(got[k] - want[k]));
+        m = fmax(m, fabs(want[k]));
+    }
+    return e / m;
+}
+
+/* max over bands of |got_l - want_l| / |want_l| (Euclidean norms per band) */
+static double band_rel_err(const double *got, const double *want, int lmax)
+{
+    double worst = 0.0;
+    for (int l = 0; l <= lmax; ++l) {
+        double e = 0.0, m = 0.0;
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+            e += (got[k] - want[k]) * (got[k] - want[k]);
+            m += want[k] * want[k];
+        }
+        worst = fmax(worst, sqrt(e / m));
+    }
+    return worst;
+}
+
+static shl_ctx *ctx_or_die(int lmax)
+{
+    shl_ctx *ctx = NULL;
+    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+    return ctx;
+}
+
+static void random_sphere(rng_t *r, double x[3], double c[3], double *rad)
+{
+    double dir[3];
+    rng_unit_vector(r, dir);
+    const double d = rng_range(r, 0.5, 5.0);
+    *rad = d * rng_range(r, 0.02, 0.98);
+    for (int k = 0; k < 3; ++k) {
+        x[k] = rng_range(r, -1.0, 1.0);
+        c[k] = x[k] + d * dir[k];
+    }
+}
+
+SHL_TEST(sphere_random_vs_quadrature)
+{
+    rng_t r = {11};
+    shl_ctx *ctx = ctx_or_die(L);
+    double worst = 0.0;
+    for (int it = 0; it < 40; ++it) {
+        double x[3], c[3], rad, got[NC], want[NC];
+        random_sphere(&r, x, c, &rad);
+        CHECK(shl_sphere(ctx, x, c, rad, got) == SHL_OK);
+        capref_sphere(L, x, c, rad, want);
+        worst = fmax(worst, rel_err(got, want, NC));
+    }
+    CHECK(worst < 2e-14);
+    harness_note("max |err|/max|coeff| %.1e (40 spheres, lmax %d)", worst, L);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(sphere_prefix_consistency)
+{
+    rng_t r = {12};
+    shl_ctx *big = ctx_or_die(L), *small = ctx_or_die(7);
+    double x[3], c[3], rad, a[NC], b[64];
+    random_sphere(&r, x, c, &rad);
+    CHECK(shl_sphere(big, x, c, rad, a) == SHL_OK);
+    CHECK(shl_sphere(small, x, c, rad, b) == SHL_OK);
+    CHECK(memcmp(a, b, sizeof b) == 0); /* bit for bit */
+    shl_ctx_destroy(big);
+    shl_ctx_destroy(small);
+}
+
+/* The ZH is HVL Eq. (14) rewritten; for caps that are not small the literal
+ * Eq. (14) is accurate, and both must agree. */
+SHL_TEST(sphere_zh_cap_matches_eq14)
+{
+    double zh[L + 1], worst = 0.0;
+    for (double a = 0.3; a <= M_PI; a += 0.2) {
+        CHECK(shl_zh_cap(L, a, zh) == SHL_OK);
+        const double al = cos(a);
+        CHECK_NEAR(zh[0], sqrt(M_PI) * (1.0 - al), 1e-15);
+        for (int l = 1; l <= L; ++l) {
+            const double eq14 = sqrt(M_PI / (2.0 * l + 1.0)) * (legendre_p(l - 1, al) - legendre_p(l + 1, al));
+            worst = fmax(worst, fabs(zh[l] - eq14));
+        }
+    }
+    CHECK(worst < 3e-15);
+    harness_note("max |zh - Eq.14| %.1e for a >= 0.3", worst);
+}
+
+/* Reference ZH of a cap by Gauss-Legendre in q = 1 - u on [0, t]. */
+static void zh_cap_ref(int lmax, double t, double *zh)
+{
+    double gx[32], gw[32];
+    capref_gauss_legendre(32, gx, gw);
+    for (int l = 0; l <= lmax; ++l) zh[l] = 0.0;
+    for (int i = 0; i < 32; ++i) {
+        const double u = 1.0 - 0.5 * t * (1.0 - gx[i]), w = 0.5 * t * gw[i];
+        for (int l = 0; l <= lmax; ++l)
+            zh[l] += w * 2.0 * M_PI * sqrt((2.0 * l + 1.0) / (4.0 * M_PI)) * legendre_p(l, u);
+    }
+}
+
+SHL_TEST(sphere_tiny_and_distant_relative_accuracy)
+{
+    /* r = 1e-4 at d = 10 (the case) and r = 1 at d = 1e6 */
+    const double cases[2][2] = {{1e-4, 10.0}, {1.0, 1e6}};
+    shl_ctx *ctx = ctx_or_die(L);
+    rng_t r = {13};
+    double worst_d[2] = {0, 0}, worst_f[2] = {0, 0}, naive = 0.0, naive_f = 0.0;
+    for (int cs = 0; cs < 2; ++cs)
+        for (int it = 0; it < 20; ++it) {
+            double dir[3], got[NC], want[NC];
+            float gotf[NC];
+            rng_unit_vector(&r, dir);
+            const double x[3] = {0.25, -0.5, 0.125}, rad = cases[cs][0], d = cases[cs][1];
+            const double c[3] = {x[0] + d * dir[0], x[1] + d * dir[1], x[2] + d * dir[2]};
+            const float xf[3] = {0.25f, -0.5f, 0.125f}, cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
+            CHECK(shl_sphere(ctx, x, c, rad, got) == SHL_OK);
+            capref_sphere(L, x, c, rad, want);
+            worst_d[cs] = fmax(worst_d[cs], band_rel_err(got, want, L));
+            CHECK(shl_sphere_f(ctx, xf, cf, (float)rad, gotf) == SHL_OK);
+            double wantf[NC], gotfd[NC]; /* reference at the float-rounded geometry */
+            const double xr[3] = {xf[0], xf[1], xf[2]}, cr[3] = {cf[0], cf[1], cf[2]};
+            capref_sphere(L, xr, cr, (float)rad, wantf);
+            for (int k = 0; k < NC; ++k) gotfd[k] = gotf[k];
+            worst_f[cs] = fmax(worst_f[cs], band_rel_err(gotfd, wantf, L));
+        }
+    /* the ZH themselves, relative per band, down to a = 1e-6 */
+    double worst_zh = 0.0;
+    for (double a = 1e-6; a < 0.5; a *= 3.7) {
+        double zh[L + 1], ref[L + 1];
+        CHECK(shl_zh_cap(L, a, zh) == SHL_OK);
+        zh_cap_ref(L, 2.0 * sin(0.5 * a) * sin(0.5 * a), ref);
+        for (int l = 0; l <= L; ++l)
+            if (a * l < 0.5) worst_zh = fmax(worst_zh, fabs(zh[l] / ref[l] - 1.0)); /* ZH not near a zero */
+    }
+    { /* the literal Eq. (14) cancels catastrophically: the case, l = 30 */
+        const double s2 = (1e-4 / 10.0) * (1e-4 / 10.0), al = sqrt(1.0 - s2), t = s2 / (1.0 + al);
+        double ref[L + 1];
+        zh_cap_ref(L, t, ref);
+        naive = fabs(sqrt(M_PI / 61.0) * (legendre_p(29, al) - legendre_p(31, al)) / ref[30] - 1.0);
+        naive_f = ((float)al == 1.0f) ? 1.0 : 0.0; /* cos a rounds to 1 in float: every band above 0 vanishes */
+    }
+    CHECK(worst_d[0] < 1e-13 && worst_d[1] < 1e-13);
+    CHECK(worst_f[0] < 2e-5 && worst_f[1] < 2e-5);
+    CHECK(worst_zh < 6e-14); /* ~l^2 ulp: cos a itself is rounded */
+    harness_note("per-band rel err r=1e-4,d=10: double %.1e float %.1e; r=1,d=1e6: double %.1e float %.1e",
+                 worst_d[0], worst_f[0], worst_d[1], worst_f[1]);
+    harness_note("ZH rel err a>=1e-6: %.1e (literal Eq.14, r=1e-4,d=10, l=30: double %.1e, float %.0f)",
+                 worst_zh, naive, naive_f);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(sphere_tangent_and_inside)
+{
+    shl_ctx *ctx = ctx_or_die(L);
+    const double c[3] = {0.5, -0.25, 2.0}, rad = 1.5;
+    double worst = 0.0;
+    for (int e = 3; e <= 12; e += 3) { /* x at distance rad (1 + 10^-e) */
+        const double gap = rad * pow(10.0, -e);
+        const double x[3] = {c[0] - (rad + gap) * 0.6, c[1] + (rad + gap) * 0.8, c[2]};
+        double got[NC], want[NC];
+        CHECK(shl_sphere(ctx, x, c, rad, got) == SHL_OK);
+        capref_sphere(L, x, c, rad, want);
+        /* cos a ~ sqrt(2 gap / r) inherits the rounding of |c - x| amplified by r / gap */
+        const double e_rel = rel_err(got, want, NC), bound = 1e-14 + 1e-16 * sqrt(rad / gap);
+        CHECK(e_rel < bound);
+        worst = fmax(worst, e_rel / bound);
+    }
+    harness_note("tangent (gap 1e-3..1e-12 r): max rel err / (1e-14 + 1e-16 sqrt(r/gap)) = %.2f", worst);
+    /* inside, on the surface (exactly representable), at the centre */
+    const double xs[3][3] = {{0.6, -0.1, 2.3}, {0.5 + 1.5, -0.25, 2.0}, {0.5, -0.25, 2.0}};
+    for (int i = 0; i < 3; ++i) {
+        double got[NC], grad[3 * NC];
+        float gf[NC], ggf[3 * NC];
+        const float xf[3] = {(float)xs[i][0], (float)xs[i][1], (float)xs[i][2]};
+        const float cf[3] = {0.5f, -0.25f, 2.0f};
+        CHECK(shl_sphere_grad(ctx, xs[i], c, rad, got, grad) == SHL_OK);
+        CHECK(shl_sphere_grad_f(ctx, xf, cf, 1.5f, gf, ggf) == SHL_OK);
+        CHECK(got[0] == sqrt(4.0 * M_PI) && gf[0] == (float)sqrt(4.0 * M_PI));
+        for (int k = 1; k < NC; ++k) CHECK(got[k] == 0.0 && gf[k] == 0.0f);
+        for (int k = 0; k < 3 * NC; ++k) CHECK(grad[k] == 0.0 && ggf[k] == 0.0f);
+    }
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(sphere_float_random)
+{
+    rng_t r = {14};
+    shl_ctx *ctx = ctx_or_die(L);
+    double worst = 0.0;
+    for (int it = 0; it < 20; ++it) {
+        double x[3], c[3], rad, want[NC], got[NC];
+        float xf[3], cf[3], gf[NC];
+        random_sphere(&r, x, c, &rad);
+        for (int k = 0; k < 3; ++k) {
+            xf[k] = (float)x[k];
+            cf[k] = (float)c[k];
+            x[k] = xf[k];
+            c[k] = cf[k];
+        }
+        rad = (float)rad;
+        CHECK(shl_sphere_f(ctx, xf, cf, (float)rad, gf) == SHL_OK);
+        capref_sphere(L, x, c, rad, want);
+        for (int k = 0; k < NC; ++k) got[k] = gf[k];
+        worst = fmax(worst, rel_err(got, want, NC));
+    }
+    CHECK(worst < 1e-5);
+    harness_note("float max |err|/max|coeff| %.1e", worst);
+    shl_ctx_destroy(ctx);
+}
+
+/* The analytic SH gradient against central differences along tangent directions. */
+SHL_TEST(sphere_sh_gradient_vs_fd)
+{
+    rng_t r = {15};
+    double worst = 0.0, radial = 0.0;
+    for (int it = 0; it < 30; ++it) {
+        double u[3], y[NC], g[3 * NC], t[3], e[3] = {0.3, -0.7, 0.2};
+        rng_unit_vector(&r, u);
+        if (it == 0) u[0] = u[1] = 0.0, u[2] = 1.0; /* the pole */
+        shl__sh_eval_grad_d(L, u, y, g, NC);
+        /* tangent t = e - (e.u) u, normalized */
+        const double eu = shl__dot3(e, u);
+        for (int k = 0; k < 3; ++k) t[k] = e[k] - eu * u[k];
+        const double tn = sqrt(shl__dot3(t, t));
+        for (int k = 0; k < 3; ++k) t[k] /= tn;
+        const double h = 1e-4;
+        double yq[2][2][NC]; /* Y at angles -2h, -h, h, 2h along t */
+        for (int s = 0; s < 2; ++s)
+            for (int sg = 0; sg < 2; ++sg) {
+                const double ang = (sg ? 1.0 : -1.0) * (s + 1) * h;
+                double v[3];
+                for (int k = 0; k < 3; ++k) v[k] = cos(ang) * u[k] + sin(ang) * t[k];
+                shl__sh_eval(L, v[0], v[1], v[2], yq[s][sg]);
+            }
+        double gmax = 0.0;
+        for (int k = 0; k < NC; ++k) gmax = fmax(gmax, fabs(g[k]) + fabs(g[NC + k]) + fabs(g[2 * NC + k]));
+        for (int k = 0; k < NC; ++k) {
+            /* 4th-order central difference in the angle (d/dangle = d/dt at angle 0) */
+            const double dd = (8.0 * (yq[0][1][k] - yq[0][0][k]) - (yq[1][1][k] - yq[1][0][k])) / (12.0 * h);
+            const double an = g[k] * t[0] + g[NC + k] * t[1] + g[2 * NC + k] * t[2];
+            worst = fmax(worst, fabs(an - dd) / gmax);
+            radial = fmax(radial, fabs(g[k] * u[0] + g[NC + k] * u[1] + g[2 * NC + k] * u[2]) / gmax);
+        }
+    }
+    CHECK(worst < 1e-11);
+    CHECK(radial < 1e-15);
+    harness_note("dY/dt vs 4th-order FD (h=1e-4): %.1e of max|grad|; radial part %.1e", worst, radial);
+}
+
+static double max_abs(const double *v, int n)
+{
+    double m = 0.0;
+    for (int k = 0; k < n; ++k) m = fmax(m, fabs(v[k]));
+    return m;
+}
+
+/* Gradient vs 8th-order central differences of the quadrature reference. */
+static void grad_case(shl_ctx *ctx, int lmax, const double x[3], const double c[3], double rad,
+                      double *err_d, double *err_f)
+{
+    const int nc = SHL_NCOEFFS(lmax);
+    double coeffs[NC], grad[3 * NC], fd[3 * NC], gd[3 * NC];
+    float xf[3], cf[3], cof[NC], grf[3 * NC];
+    const double v[3] = {c[0] - x[0], c[1] - x[1], c[2] - x[2]}, d = sqrt(shl__dot3(v, v));
+    const double h = exp2(floor(log2(fmin(d - rad, d / (lmax + 1.0)) / 32.0))); /* x +- k h exact */
+    CHECK(shl_sphere_grad(ctx, x, c, rad, coeffs, grad) == SHL_OK);
+    capref_sphere_fd(lmax, x, c, rad, h, fd);
+    const double gm = max_abs(fd, 3 * nc);
+    double e = 0.0;
+    for (int k = 0; k < 3 * nc; ++k) e = fmax(e, fabs(grad[k] - fd[k]));
+    *err_d = fmax(*err_d, e / gm);
+    for (int k = 0; k < 3; ++k) {
+        xf[k] = (float)x[k];
+        cf[k] = (float)c[k];
+    }
+    CHECK(shl_sphere_grad_f(ctx, xf, cf, (float)rad, cof, grf) == SHL_OK);
+    /* float against the double gradient at the float-rounded geometry */
+    const double xr[3] = {xf[0], xf[1], xf[2]}, cr[3] = {cf[0], cf[1], cf[2]};
+    CHECK(shl_sphere_grad(ctx, xr, cr, (float)rad, coeffs, gd) == SHL_OK);
+    const double gmf = max_abs(gd, 3 * nc);
+    if (gmf == 0.0) return; /* rounding to float moved x inside the sphere */
+    e = 0.0;
+    for (int k = 0; k < 3 * nc; ++k) e = fmax(e, fabs(grf[k] - gd[k]));
+    *err_f = fmax(*err_f, e / gmf);
+}
+
+/* The FD error is dominated by the reference's rounding noise (~1e-14)
+ * amplified by d/h: the figures bound the analytic gradient's error. */
+SHL_TEST(sphere_grad_vs_fd)
+{
+    rng_t r = {16};
+    shl_ctx *ctx = ctx_or_die(L);
+    double ed = 0.0, ef = 0.0, ed_hard = 0.0, ed_tan[2] = {0.0, 0.0};
+    for (int it = 0; it < 6; ++it) {
+        double x[3], c[3], rad;
+        random_sphere(&r, x, c, &rad);
+        grad_case(ctx, L, x, c, rad, &ed, &ef);
+    }
+    /* tiny, distant, tangent (gap 1e-4 r and 1e-7 r) */
+    const double x0[3] = {0.125, 0.25, -0.375};
+    const double tiny_c[3] = {0.125 + 6.0, 0.25 + 8.0, -0.375};
+    grad_case(ctx, L, x0, tiny_c, 1e-4, &ed_hard, &ef);
+    const double far_c[3] = {0.125, 0.25 - 6e5, -0.375 + 8e5};
+    grad_case(ctx, L, x0, far_c, 1.0, &ed_hard, &ef);
+    for (int i = 0; i < 2; ++i) {
+        const double rad = 2.0, d = rad * (1.0 + (i ? 1e-7 : 1e-4));
+        const double c[3] = {x0[0] + 0.48 * d, x0[1] - 0.6 * d, x0[2] + 0.64 * d};
+        grad_case(ctx, L, x0, c, rad, &ed_tan[i], &ef);
+    }
+    CHECK(ed < 6e-11 && ed_hard < 1e-12);
+    CHECK(ed_tan[0] < 3e-10 && ed_tan[1] < 1e-8);
+    CHECK(ef < 1e-5);
+    harness_note("max |grad - FD|/max|grad| (double): random %.1e, tiny+distant %.1e, tangent gap 1e-4 r %.1e, "
+                 "gap 1e-7 r %.1e; float vs double %.1e",
+                 ed, ed_hard, ed_tan[0], ed_tan[1], ef);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(sphere_bad_input)
+{
+    shl_ctx *ctx = ctx_or_die(3);
+    const double x[3] = {0, 0, 0}, c[3] = {0, 0, 5}, nan3[3] = {0, NAN, 0}, inf3[3] = {INFINITY, 0, 0};
+    const float xf[3] = {0, 0, 0}, cf[3] = {0, 0, 5}, nanf3[3] = {0, NAN, 0};
+    double out[17], grad[49];
+    float outf[17], gradf[49];
+    guard_fill(out, 17);
+    guard_fill(grad, 49);
+    for (int k = 0; k < 17; ++k) outf[k] = (float)GUARD_VALUE;
+    for (int k = 0; k < 49; ++k) gradf[k] = (float)GUARD_VALUE;
+    CHECK(shl_sphere(NULL, x, c, 1.0, out) == SHL_ENULL);
+    CHECK(shl_sphere(ctx, NULL, c, 1.0, out) == SHL_ENULL);
+    CHECK(shl_sphere(ctx, x, NULL, 1.0, out) == SHL_ENULL);
+    CHECK(shl_sphere(ctx, x, c, 1.0, NULL) == SHL_ENULL);
+    CHECK(shl_sphere_grad(ctx, x, c, 1.0, out, NULL) == SHL_ENULL);
+    CHECK(shl_sphere_grad(ctx, x, c, 1.0, NULL, grad) == SHL_ENULL);
+    CHECK(shl_sphere(ctx, x, c, 0.0, out) == SHL_EDOMAIN);
+    CHECK(shl_sphere(ctx, x, c, -1.0, out) == SHL_EDOMAIN);
+    CHECK(shl_sphere(ctx, x, c, NAN, out) == SHL_ENONFINITE);
+    CHECK(shl_sphere(ctx, x, c, INFINITY, out) == SHL_ENONFINITE);
+    CHECK(shl_sphere(ctx, nan3, c, 1.0, out) == SHL_ENONFINITE);
+    CHECK(shl_sphere(ctx, x, inf3, 1.0, out) == SHL_ENONFINITE);
+    CHECK(shl_sphere_grad(ctx, x, c, 0.0, out, grad) == SHL_EDOMAIN);
+    CHECK(shl_sphere_grad(ctx, inf3, c, 1.0, out, grad) == SHL_ENONFINITE);
+    CHECK(guard_intact(out, 17) && guard_intact(grad, 49));
+    CHECK(shl_sphere_f(ctx, xf, cf, 0.0f, outf) == SHL_EDOMAIN);
+    CHECK(shl_sphere_f(ctx, nanf3, cf, 1.0f, outf) == SHL_ENONFINITE);
+    CHECK(shl_sphere_f(ctx, xf, cf, (float)NAN, outf) == SHL_ENONFINITE);
+    CHECK(shl_sphere_f(NULL, xf, cf, 1.0f, outf) == SHL_ENULL);
+    CHECK(shl_sphere_grad_f(ctx, xf, cf, -1.0f, outf, gradf) == SHL_EDOMAIN);
+    CHECK(shl_sphere_grad_f(ctx, xf, cf, 1.0f, outf, NULL) == SHL_ENULL);
+    for (int k = 0; k < 17; ++k) CHECK(outf[k] == (float)GUARD_VALUE);
+    for (int k = 0; k < 49; ++k) CHECK(gradf[k] == (float)GUARD_VALUE);
+    /* lmax 3 writes exactly 16 coefficients and 48 gradient entries */
+    CHECK(shl_sphere_grad(ctx, x, c, 1.0, out, grad) == SHL_OK);
+    CHECK(out[16] == GUARD_VALUE && grad[48] == GUARD_VALUE);
+    CHECK(all_finite(out, 16) && all_finite(grad, 48));
+    /* shl_zh_cap */
+    double zh[32];
+    guard_fill(zh, 32);
+    CHECK(shl_zh_cap(3, 0.5, NULL) == SHL_ENULL);
+    CHECK(shl_zh_cap(-1, 0.5, zh) == SHL_ELMAX);
+    CHECK(shl_zh_cap(SHL_LMAX_MAX + 1, 0.5, zh) == SHL_ELMAX);
+    CHECK(shl_zh_cap(3, NAN, zh) == SHL_ENONFINITE);
+    CHECK(shl_zh_cap(3, -0.1, zh) == SHL_EDOMAIN);
+    CHECK(shl_zh_cap(3, 3.2, zh) == SHL_EDOMAIN);
+    CHECK(guard_intact(zh, 32));
+    CHECK(shl_zh_cap(3, M_PI, zh) == SHL_OK && zh[4] == GUARD_VALUE);
+    CHECK_NEAR(zh[0], 2.0 * sqrt(M_PI), 1e-15); /* the whole sphere */
+    shl_ctx_destroy(ctx);
+}
