@@ -1,0 +1,146 @@
+/* Polygon SH gradients (Wu et al. 2020) against the independent reference
+ * (ref_quad.c: moving-boundary or differentiated area-form quadrature).
+ * Errors are relative to the largest gradient magnitude of the case. */
+#include "geom.h"
+#include "harness.h"
+#include "internal.h"
+#include "ref_quad.h"
+#include "zh_tables.h"
+#include <math.h>
+#include <stdio.h>
+
+enum { NC20 = SHL_NCOEFFS(20), NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
+
+/* max |got - want| / max |want| over the 3*nc gradient entries, and the coefficient error / omega */
+static double grad_error(const shl_ctx *ctx, const double x[3], const double *v, int n, double *coef_err)
+{
+    const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax);
+    static double c[NCMAX], gr[3 * NCMAX], rc[NCMAX], rg[3 * NCMAX];
+    double omega, worst = 0.0, scale = 0.0;
+    CHECK(shl_polygon_grad(ctx, x, v, n, c, gr) == SHL_OK);
+    CHECK(ref_polygon_sh_grad(lmax, x, v, n, rc, rg, NULL) == 0);
+    CHECK(shl_polygon_solid_angle(x, v, n, &omega) == SHL_OK);
+    CHECK(all_finite(gr, 3 * nc) && all_finite(c, nc));
+    for (int k = 0; k < 3 * nc; ++k) {
+        scale = fmax(scale, fabs(rg[k]));
+        worst = fmax(worst, fabs(gr[k] - rg[k]));
+    }
+    double ce = 0.0;
+    for (int k = 0; k < nc; ++k) ce = fmax(ce, fabs(c[k] - rc[k]));
+    if (coef_err) *coef_err = ce / omega;
+    return worst / scale;
+}
+
+static void grad_case(const char *what, int lmax, const double x[3], const double *v, int n, double tol)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+    double ce;
+    const double e = grad_error(ctx, x, v, n, &ce);
+    if (!(e <= tol)) harness_fail(__FILE__, __LINE__, "%s: gradient error %.3g > %.3g", what, e, tol);
+    /* the joint pass meets the coefficient bounds of shl_polygon */
+    CHECK(ce <= (lmax <= 14 ? 1e-12 : 1e-10));
+    harness_note("%s %.1e (coeffs %.1e)", what, e, ce);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(polygon_grad_vs_reference_random)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(20, &ctx) == SHL_OK);
+    rng_t r = {21};
+    double worst = 0.0;
+    for (int it = 0; it < 30; ++it) {
+        double center[3], nrm[3], off[3], v[18], x[3];
+        const int n = it % 3 == 0 ? 3 : it % 3 == 1 ? 4 : 6;
+        for (int k = 0; k < 3; ++k) center[k] = rng_range(&r, -1, 1);
+        rng_unit_vector(&r, nrm);
+        random_polygon(&r, n, n == 6, center, nrm, rng_range(&r, 0.3, 2.0), v);
+        rng_unit_vector(&r, off);
+        if (fabs(off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]) < 0.05)
+            for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
+        const double dist = rng_range(&r, 0.5, 4.0);
+        for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+        const double e = grad_error(ctx, x, v, n, NULL);
+        worst = fmax(worst, e);
+        if (!(e <= 1e-8)) harness_fail(__FILE__, __LINE__, "case %d: %.3g, x = (%a, %a, %a)", it, e, x[0], x[1], x[2]);
+    }
+    harness_note("lmax 20 max gradient error / max|grad| %.2e (tol 1e-8)", worst);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(polygon_grad_float)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
+    const float vf[12] = {-0.5f, -0.2f, 1.0f, 0.7f, -0.1f, 1.2f, 0.1f, 0.8f, 0.9f, -0.6f, 0.5f, 0.8f};
+    const float xf[3] = {0.1f, 0.1f, 0.0f};
+    double v[12], x[3] = {xf[0], xf[1], xf[2]}, rc[NCMAX], rg[3 * NCMAX], scale = 0, worst = 0;
+    float c[NCMAX], g[3 * NCMAX];
+    for (int k = 0; k < 12; ++k) v[k] = vf[k];
+    CHECK(shl_polygon_grad_f(ctx, xf, vf, 3, c, g) == SHL_OK);
+    CHECK(ref_polygon_sh_grad(14, x, v, 3, rc, rg, NULL) == 0);
+    for (int k = 0; k < 3 * SHL_NCOEFFS(14); ++k) {
+        scale = fmax(scale, fabs(rg[k]));
+        worst = fmax(worst, fabs(g[k] - rg[k]));
+    }
+    CHECK(worst / scale <= 1e-4);
+    harness_note("float lmax 14 gradient error / max|grad| %.1e (tol 1e-4)", worst / scale);
+    shl_ctx_destroy(ctx);
+}
+
+/* An edge whose plane normal is exactly a lobe direction: A = 0 in Wu 2020 Eq. (23). */
+SHL_TEST(polygon_grad_lobe_on_edge_plane_normal)
+{
+    const double x[3] = {0, 0, 0};
+    const int lobes[3] = {0, 3, 2 * 20};
+    for (int i = 0; i < 3; ++i) {
+        const double *d = shl__zh_dir[lobes[i]];
+        double u[3], w[3], v[9];
+        plane_basis(d, u, w);
+        for (int k = 0; k < 3; ++k) {
+            v[k] = 1.3 * u[k];                              /* edge 0 -> 1 lies in the plane normal to d */
+            v[3 + k] = 0.9 * (0.6 * u[k] + 0.8 * w[k]);
+            v[6 + k] = 1.1 * (0.3 * u[k] + 0.3 * w[k] + 0.9 * d[k]);
+        }
+        char what[48];
+        snprintf(what, sizeof what, "lobe %d on edge normal", lobes[i]);
+        grad_case(what, 20, x, v, 3, 1e-8);
+    }
+}
+
+SHL_TEST(polygon_grad_short_edge_and_near_edge)
+{
+    const double short_edge[12] = {0, 0, 0, 1, 0, 0, 1, 1e-6, 0, 0, 1, 0}; /* edge 1-2 has length 1e-6 */
+    const double x1[3] = {0.3, 0.4, 0.7};
+    grad_case("edge length 1e-6", 20, x1, short_edge, 4, 1e-8);
+    const double square[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const double x2[3] = {0.5, -1e-6 / M_SQRT2, 1e-6 / M_SQRT2}; /* 1e-6 from an edge, off the plane */
+    grad_case("point 1e-6 from an edge", 20, x2, square, 4, 1e-8);
+    const double x3[3] = {0.3, 0.6, 1e-7};
+    grad_case("point 1e-7 above the plane", 20, x3, square, 4, 1e-8);
+}
+
+SHL_TEST(polygon_grad_in_plane_and_bad_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(4, &ctx) == SHL_OK);
+    const double square[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, in_plane[3] = {2, 0.5, 0};
+    double c[26], g[76];
+    guard_fill(c, 26);
+    guard_fill(g, 76);
+    CHECK(shl_polygon_grad(ctx, in_plane, square, 4, c, g) == SHL_OK);
+    for (int k = 0; k < 25; ++k) CHECK(c[k] == 0.0);
+    for (int k = 0; k < 75; ++k) CHECK(g[k] == 0.0);
+    CHECK(c[25] == GUARD_VALUE && g[75] == GUARD_VALUE);
+    guard_fill(c, 26);
+    guard_fill(g, 76);
+    const double x[3] = {0.5, 0.5, 1}, bad[3] = {0.5, NAN, 1};
+    CHECK(shl_polygon_grad(ctx, x, square, 4, c, NULL) == SHL_ENULL);
+    CHECK(shl_polygon_grad(ctx, x, square, 4, NULL, g) == SHL_ENULL);
+    CHECK(shl_polygon_grad(NULL, x, square, 4, c, g) == SHL_ENULL);
+    CHECK(shl_polygon_grad(ctx, x, square, 2, c, g) == SHL_ENVERTS);
+    CHECK(shl_polygon_grad(ctx, bad, square, 4, c, g) == SHL_ENONFINITE);
+    CHECK(guard_intact(c, 26) && guard_intact(g, 76));
+    shl_ctx_destroy(ctx);
+}
