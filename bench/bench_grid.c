@@ -1,0 +1,472 @@
+/* Gradients, sparse grids and interpolation (Wu et al. 2020, Sec. 6-7):
+ *  - Fig. 4: coefficient (7,2) along a line, trilinear / Taylor (Annen 2004) / Hermite from 10 samples,
+ *  - Fig. 6: d/dx of (6,-3) and (7,2), analytic vs central differences,
+ *  - cost of the analytic gradient vs coefficients only and vs finite differences,
+ *  - Fig. 8: many lights on a heightfield, per-vertex analytic vs 8^3 grid + Hermite,
+ *  - Fig. 9: grid resolution vs time and error; thread scaling of fill and interpolation.
+ * All ratios come from one run.  CSVs (dir = argv[1], default build/bench):
+ *  <dir>/bench_grid_fig4.csv: the Fig. 4 curves, then the 10 samples with their d/dx;
+ *  <dir>/bench_grid.csv: one row per table row, value1/value2 = fig4: max error, / max |L72|;
+ *  fig6: max |analytic - FD|, relative; gradcost: grad/coeffs and FD/analytic time ratios;
+ *  gradcost_set: s per light without/with gradients; fig8: per-vertex s, grid s;
+ *  fig9: grid s, Hermite max error; threads: 1-thread s, 2-thread s. */
+#include "shlight.h"
+#include "util.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static FILE *csv;
+static shl_lights *subdivided_light(int nl);
+
+static shl_ctx *new_ctx(int lmax)
+{
+    shl_ctx *ctx;
+    if (shl_ctx_create(lmax, &ctx) != SHL_OK) exit(1);
+    return ctx;
+}
+
+static void must(int st, const char *what)
+{
+    if (st != SHL_OK) {
+        fprintf(stderr, "%s: %s\n", what, shl_strerror(st));
+        exit(1);
+    }
+}
+
+static void *xmalloc(size_t n)
+{
+    void *p = malloc(n);
+    if (!p) {
+        fprintf(stderr, "out of memory\n");
+        exit(1);
+    }
+    return p;
+}
+
+/* ---- Wu 2020 Fig. 4 -------------------------------------------------------- */
+
+/* Square light (-1,-1,2)-(1,1,2); line y = 0.3, z = 0, x in [-2, 2]; lmax 7.
+ * The 10 samples are a 10 x 2 x 2 grid whose y/z extent is 1e-6, so each method
+ * acts along the line only (tests/test_grid.c uses the same setup). */
+static void fig4(const char *dir)
+{
+    enum { NP = 2000, NS = 10, N7 = SHL_NCOEFFS(7), K72 = 7 * 8 + 2 };
+    const double rect[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2}, white[3] = {1, 1, 1};
+    const double lo[3] = {-2.0, 0.3, 0.0}, hi[3] = {2.0, 0.3 + 1e-6, 1e-6};
+    const int res[3] = {NS, 2, 2};
+    shl_ctx *ctx = new_ctx(7);
+    shl_lights *l;
+    shl_grid *g;
+    must(shl_lights_create(&l), "lights");
+    must(shl_lights_add_polygon(l, rect, 4, white, 1), "add");
+    must(shl_grid_create(ctx, lo, hi, res, SHL_GRID_DOUBLE, &g), "grid");
+    must(shl_grid_fill(g, l, 1), "fill");
+    double *pts = xmalloc(sizeof(double) * 3 * NP), *ref = xmalloc(sizeof(double) * 3 * N7 * NP);
+    double *out[5];
+    for (int p = 0; p < NP; ++p) {
+        pts[3 * p] = lo[0] + (hi[0] - lo[0]) * p / (NP - 1);
+        pts[3 * p + 1] = lo[1];
+        pts[3 * p + 2] = lo[2];
+    }
+    must(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL), "reference");
+    const char *names[5] = {"trilinear", "Taylor b=1", "Taylor b=2", "Taylor b=4", "Hermite"};
+    const int methods[5] = {SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR, SHL_INTERP_TAYLOR, SHL_INTERP_TAYLOR, SHL_INTERP_HERMITE};
+    const double bexp[5] = {0, 1, 2, 4, 0};
+    double err[5] = {0}, scale = 0.0;
+    for (int p = 0; p < NP; ++p) scale = fmax(scale, fabs(ref[p * 3 * N7 + K72]));
+    for (int m = 0; m < 5; ++m) {
+        out[m] = xmalloc(sizeof(double) * 3 * N7 * NP);
+        must(shl_grid_interp(g, methods[m], bexp[m], NP, pts, out[m], 1), "interp");
+        for (int p = 0; p < NP; ++p) err[m] = fmax(err[m], fabs(out[m][p * 3 * N7 + K72] - ref[p * 3 * N7 + K72]));
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/bench_grid_fig4.csv", dir);
+    FILE *f = fopen(path, "w");
+    if (f) {
+        fprintf(f, "kind,x,reference,trilinear,taylor_b2,hermite,ddx\n");
+        for (int p = 0; p < NP; ++p)
+            fprintf(f, "curve,%.6f,%.9e,%.9e,%.9e,%.9e,\n", pts[3 * p], ref[p * 3 * N7 + K72], out[0][p * 3 * N7 + K72],
+                    out[2][p * 3 * N7 + K72], out[4][p * 3 * N7 + K72]);
+        for (int i = 0; i < NS; ++i) { /* the samples: node value and d/dx */
+            const int idx[3] = {i, 0, 0};
+            double pos[3], v[3 * N7], gr[9 * N7];
+            must(shl_grid_node_position(g, idx, pos), "node");
+            must(shl_grid_get_node(g, idx, v, gr), "node");
+            fprintf(f, "sample,%.6f,%.9e,,,,%.9e\n", pos[0], v[K72], gr[K72]);
+        }
+        fclose(f);
+    }
+    printf("\n## Wu 2020 Fig. 4: coefficient (7,2) along a line from %d samples (lmax 7)\n\n", NS);
+    printf("Square light (-1,-1,2)-(1,1,2), two-sided; line y = 0.3, z = 0, x in [-2, 2]; reference: %d points,\n"
+           "per-point analytic; max |L72| on the line %.4f.  Curve: %s\n\n", NP, scale, path);
+    printf("| method | max abs error | max error / max abs L72 | Hermite is more accurate by |\n|---|---|---|---|\n");
+    for (int m = 0; m < 5; ++m) {
+        printf("| %s | %.3e | %.2e | %.1fx |\n", names[m], err[m], err[m] / scale, err[m] / err[4]);
+        if (csv) fprintf(csv, "fig4,%s,%d,%.6e,%.6e\n", names[m], NS, err[m], err[m] / scale);
+    }
+    printf("\nTarget: Hermite >= 10x more accurate than trilinear and Taylor: %s\n",
+           err[4] * 10 <= err[0] && err[4] * 10 <= err[1] && err[4] * 10 <= err[2] && err[4] * 10 <= err[3] ? "met" : "NOT met");
+    for (int m = 0; m < 5; ++m) free(out[m]);
+    free(pts);
+    free(ref);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* ---- Wu 2020 Fig. 6 -------------------------------------------------------- */
+
+static void fig6(void)
+{
+    enum { NPIX = 64, N8 = SHL_NCOEFFS(8) };
+    const double rect[12] = {-5, -5, 1, 5, -5, 1, 5, 5, 1, -5, 5, 1}, delta = 1e-3;
+    const int ks[2] = {6 * 7 - 3, 7 * 8 + 2};
+    shl_ctx *ctx = new_ctx(8);
+    double diff[2] = {0, 0}, scale[2] = {0, 0};
+    for (int i = 0; i < NPIX; ++i)
+        for (int j = 0; j < NPIX; ++j) {
+            const double x[3] = {3.0 + 3.0 * (i + 0.5) / NPIX, 3.0 + 3.0 * (j + 0.5) / NPIX, 0.0};
+            const double xp[3] = {x[0] + delta, x[1], x[2]}, xm[3] = {x[0] - delta, x[1], x[2]};
+            double c[N8], gr[3 * N8], cp[N8], cm[N8];
+            must(shl_polygon_grad(ctx, x, rect, 4, c, gr), "grad");
+            must(shl_polygon(ctx, xp, rect, 4, cp), "polygon");
+            must(shl_polygon(ctx, xm, rect, 4, cm), "polygon");
+            for (int q = 0; q < 2; ++q) {
+                const double fd = (cp[ks[q]] - cm[ks[q]]) / (2 * delta);
+                diff[q] = fmax(diff[q], fabs(gr[ks[q]] - fd));
+                scale[q] = fmax(scale[q], fabs(gr[ks[q]]));
+            }
+        }
+    printf("\n## Wu 2020 Fig. 6: d/dx of two coefficients, analytic vs central differences\n\n");
+    printf("Light (-5,-5,1)-(5,5,1); %dx%d pixel centres over (3,3,0)-(6,6,0); FD step %.0e; lmax 8.\n\n", NPIX, NPIX, delta);
+    printf("| (l,m) | max abs d/dx | max abs(analytic - FD) | relative |\n|---|---|---|---|\n");
+    const char *lm[2] = {"(6,-3)", "(7,2)"};
+    for (int q = 0; q < 2; ++q) {
+        printf("| %s | %.4e | %.2e | %.1e |\n", lm[q], scale[q], diff[q], diff[q] / scale[q]);
+        if (csv) fprintf(csv, "fig6,%s,%d,%.6e,%.6e\n", lm[q], NPIX * NPIX, diff[q], diff[q] / scale[q]);
+    }
+    printf("\n(the difference is the FD truncation error, O(delta^2))\n");
+    shl_ctx_destroy(ctx);
+}
+
+/* ---- cost of gradients ----------------------------------------------------- */
+
+enum { GPTS = 64 };
+typedef struct {
+    const shl_ctx *ctx;
+    double verts[12];
+    double pts[GPTS][3];
+    long inner;
+} grad_job;
+
+static double gbuf[4 * SHL_NCOEFFS(SHL_LMAX_MAX)];
+
+static void run_coeffs(void *p)
+{
+    grad_job *j = p;
+    for (long i = 0; i < j->inner; ++i) shl_polygon(j->ctx, j->pts[i % GPTS], j->verts, 4, gbuf);
+    bench_sink += gbuf[0];
+}
+
+static void run_grad(void *p)
+{
+    grad_job *j = p;
+    const int nc = SHL_NCOEFFS(shl_ctx_lmax(j->ctx));
+    for (long i = 0; i < j->inner; ++i) shl_polygon_grad(j->ctx, j->pts[i % GPTS], j->verts, 4, gbuf, gbuf + nc);
+    bench_sink += gbuf[0];
+}
+
+static void run_fd(void *p) /* value + central differences: 7 coefficient evaluations */
+{
+    grad_job *j = p;
+    const int nc = SHL_NCOEFFS(shl_ctx_lmax(j->ctx));
+    const double h = 1e-3;
+    for (long i = 0; i < j->inner; ++i) {
+        const double *x = j->pts[i % GPTS];
+        shl_polygon(j->ctx, x, j->verts, 4, gbuf);
+        for (int a = 0; a < 3; ++a) {
+            double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
+            xp[a] += h;
+            xm[a] -= h;
+            shl_polygon(j->ctx, xp, j->verts, 4, gbuf + nc);
+            shl_polygon(j->ctx, xm, j->verts, 4, gbuf + 2 * nc);
+            for (int k = 0; k < nc; ++k) gbuf[3 * nc + k] = (gbuf[nc + k] - gbuf[2 * nc + k]) / (2 * h);
+        }
+    }
+    bench_sink += gbuf[3 * SHL_NCOEFFS(shl_ctx_lmax(j->ctx))];
+}
+
+static const shl_lights *set_lights;
+
+static void run_set(void *p) /* a light set: ZH integrals accumulated, one reconstruction per point */
+{
+    grad_job *j = p;
+    static double out[GPTS * 3 * SHL_NCOEFFS(8)];
+    for (long i = 0; i < j->inner; ++i) shl_lights_eval_batch(j->ctx, set_lights, GPTS, j->pts[0], out, NULL);
+    bench_sink += out[0];
+}
+
+static void run_set_grad(void *p)
+{
+    grad_job *j = p;
+    static double out[GPTS * 3 * SHL_NCOEFFS(8)], g[GPTS * 9 * SHL_NCOEFFS(8)];
+    for (long i = 0; i < j->inner; ++i) shl_lights_eval_batch(j->ctx, set_lights, GPTS, j->pts[0], out, g);
+    bench_sink += out[0];
+}
+
+static double timed(void (*fn)(void *), grad_job *j) /* seconds per evaluation, median of 7 x ~20 ms */
+{
+    j->inner = 1;
+    const double t0 = bench_now();
+    long n = 0;
+    while (bench_now() - t0 < 0.005) { fn(j); ++n; }
+    j->inner = (long)fmax(1.0, 0.02 * n / (bench_now() - t0));
+    return bench_run(fn, j, j->inner, 7).median;
+}
+
+static void grad_cost(void)
+{
+    printf("\n## Cost of analytic gradients (one quad light, double, one core)\n\n");
+    printf("| lmax | shl_polygon ns | shl_polygon_grad ns | grad / coeffs (target <= 1.4; paper 1.22-1.3) |"
+           " central FD (7 evaluations) ns | FD / analytic (target >= 4; paper 3) |\n|---|---|---|---|---|---|\n");
+    const int lmaxes[2] = {4, 8};
+    static grad_job j;
+    const double quad[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2};
+    memcpy(j.verts, quad, sizeof quad);
+    srand(1);
+    for (int p = 0; p < GPTS; ++p)
+        for (int a = 0; a < 3; ++a) j.pts[p][a] = 2.0 * rand() / RAND_MAX - 1.0;
+    for (int i = 0; i < 2; ++i) {
+        shl_ctx *ctx = new_ctx(lmaxes[i]);
+        j.ctx = ctx;
+        const double tc = timed(run_coeffs, &j), tg = timed(run_grad, &j), tf = timed(run_fd, &j);
+        printf("| %d | %.0f | %.0f | %.2f | %.0f | %.1fx |\n", lmaxes[i], tc * 1e9, tg * 1e9, tg / tc, tf * 1e9, tf / tg);
+        if (csv) fprintf(csv, "gradcost,lmax%d,4,%.6e,%.6e\n", lmaxes[i], tg / tc, tf / tg);
+        shl_ctx_destroy(ctx);
+    }
+    shl_lights *l = subdivided_light(64);
+    set_lights = l;
+    printf("\nIn a light set the reconstruction is shared (64 triangle lights, %d points per call):\n\n"
+           "| lmax | coefficients ns per light | with gradients ns per light | ratio |\n|---|---|---|---|\n", GPTS);
+    for (int i = 0; i < 2; ++i) {
+        shl_ctx *ctx = new_ctx(lmaxes[i]);
+        j.ctx = ctx;
+        const double tc = timed(run_set, &j) / (GPTS * 64.0), tg = timed(run_set_grad, &j) / (GPTS * 64.0);
+        printf("| %d | %.0f | %.0f | %.2f |\n", lmaxes[i], tc * 1e9, tg * 1e9, tg / tc);
+        if (csv) fprintf(csv, "gradcost_set,lmax%d,64,%.6e,%.6e\n", lmaxes[i], tc, tg);
+        shl_ctx_destroy(ctx);
+    }
+    shl_lights_destroy(l);
+}
+
+/* ---- many lights (Wu 2020 Figs. 8-9) -------------------------------------- */
+
+enum { HF = 100, NVERT = HF * HF, MLMAX = 4, MNC = SHL_NCOEFFS(MLMAX) };
+
+/* 100 x 100-vertex heightfield z = 0.15 sin(3x) cos(2y) over [-1,1]^2; its bounding box. */
+static double *heightfield(double lo[3], double hi[3])
+{
+    double *v = xmalloc(sizeof(double) * 3 * NVERT);
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = INFINITY;
+        hi[a] = -INFINITY;
+    }
+    for (int i = 0; i < HF; ++i)
+        for (int j = 0; j < HF; ++j) {
+            double *p = v + 3 * (i * HF + j);
+            p[0] = -1.0 + 2.0 * j / (HF - 1);
+            p[1] = -1.0 + 2.0 * i / (HF - 1);
+            p[2] = 0.15 * sin(3 * p[0]) * cos(2 * p[1]);
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = fmin(lo[a], p[a]);
+                hi[a] = fmax(hi[a], p[a]);
+            }
+        }
+    return v;
+}
+
+/* The rectangle (-0.8,-0.8,1)-(0.8,0.8,1), facing down (one-sided), as nl lights:
+ * nl = 1: one quad; else nl/2 strips along x of two triangles each.  The field is the same for every nl. */
+static shl_lights *subdivided_light(int nl)
+{
+    shl_lights *l;
+    const double rgb[3] = {1.0, 0.9, 0.8}, z = 1.0, a = -0.8, b = 0.8;
+    must(shl_lights_create(&l), "lights");
+    if (nl == 1) {
+        const double quad[12] = {a, a, z, a, b, z, b, b, z, b, a, z}; /* clockwise from above: faces -z */
+        must(shl_lights_add_polygon(l, quad, 4, rgb, 0), "add");
+        return l;
+    }
+    for (int s = 0; s < nl / 2; ++s) {
+        const double x0 = a + (b - a) * s / (nl / 2), x1 = a + (b - a) * (s + 1) / (nl / 2);
+        const double t1[9] = {x0, a, z, x0, b, z, x1, b, z}, t2[9] = {x0, a, z, x1, b, z, x1, a, z};
+        must(shl_lights_add_polygon(l, t1, 3, rgb, 0), "add");
+        must(shl_lights_add_polygon(l, t2, 3, rgb, 0), "add");
+    }
+    return l;
+}
+
+/* max and mean |got - want| / max |want L00| over all vertices, colours and coefficients */
+static void field_error(const double *got, const double *want, double *max_err, double *mean_err)
+{
+    double scale = 0.0, mx = 0.0, sum = 0.0;
+    for (int p = 0; p < NVERT; ++p) scale = fmax(scale, fabs(want[p * 3 * MNC]));
+    for (long i = 0; i < (long)NVERT * 3 * MNC; ++i) {
+        const double e = fabs(got[i] - want[i]);
+        mx = fmax(mx, e);
+        sum += e;
+    }
+    *max_err = mx / scale;
+    *mean_err = sum / ((double)NVERT * 3 * MNC) / scale;
+}
+
+/* A res^3 float grid over the box filled from the lights: best fill time of `reps`. */
+static shl_grid *filled_grid(const shl_ctx *ctx, const shl_lights *l, const double lo[3], const double hi[3], int res,
+                             int nthreads, int reps, double *fill_s)
+{
+    const int r3[3] = {res, res, res};
+    shl_grid *g;
+    must(shl_grid_create(ctx, lo, hi, r3, SHL_GRID_FLOAT, &g), "grid");
+    *fill_s = INFINITY;
+    for (int rep = 0; rep < reps; ++rep) {
+        const double t0 = bench_now();
+        must(shl_grid_fill(g, l, nthreads), "fill");
+        *fill_s = fmin(*fill_s, bench_now() - t0);
+    }
+    return g;
+}
+
+/* Interpolate every vertex: best time of `reps`. */
+static double interp_all(const shl_grid *g, int method, int nthreads, int reps, const double *verts, double *out)
+{
+    double best = INFINITY;
+    for (int rep = 0; rep < reps; ++rep) {
+        const double t0 = bench_now();
+        must(shl_grid_interp(g, method, 2.0, NVERT, verts, out, nthreads), "interp");
+        best = fmin(best, bench_now() - t0);
+    }
+    return best;
+}
+
+static double per_vertex(const shl_ctx *ctx, const shl_lights *l, int reps, const double *verts, double *out)
+{
+    double best = INFINITY;
+    for (int rep = 0; rep < reps; ++rep) {
+        const double t0 = bench_now();
+        must(shl_lights_eval_batch(ctx, l, NVERT, verts, out, NULL), "per-vertex");
+        best = fmin(best, bench_now() - t0);
+    }
+    return best;
+}
+
+static void many_lights(void)
+{
+    double lo[3], hi[3];
+    double *verts = heightfield(lo, hi);
+    double *ref = xmalloc(sizeof(double) * NVERT * 3 * MNC), *out = xmalloc(sizeof(double) * NVERT * 3 * MNC);
+    shl_ctx *ctx = new_ctx(MLMAX);
+    printf("\n## Wu 2020 Fig. 8: lighting every vertex of a heightfield with many lights (lmax %d, one thread)\n\n", MLMAX);
+    printf("Mesh: %dx%d-vertex heightfield z = 0.15 sin(3x) cos(2y) over [-1,1]^2 (%d vertices).  Lights: the\n"
+           "rectangle (-0.8,-0.8,1)-(0.8,0.8,1), one-sided facing the mesh, as 1 quad or n triangles (n/2 strips).\n"
+           "Grid: 8^3 float nodes over the mesh's bounding box, filled with coefficients + gradients, then\n"
+           "Hermite-interpolated at every vertex.  Times: best of 3 (2 from 256 lights).  Errors vs per-vertex\n"
+           "analytic, relative to max |L00| (the field is the same for every light count).\n\n", HF, HF, NVERT);
+    printf("| lights | per-vertex analytic ms | grid fill ms | Hermite interp ms | grid total ms | speed-up | max err | mean err |\n"
+           "|---|---|---|---|---|---|---|---|\n");
+    int crossover = -1;
+    for (int nl = 1; nl <= 512; nl *= 2) {
+        shl_lights *l = subdivided_light(nl);
+        const int reps = nl >= 256 ? 2 : 3;
+        const double tv = per_vertex(ctx, l, reps, verts, ref);
+        double tf;
+        shl_grid *g = filled_grid(ctx, l, lo, hi, 8, 1, reps, &tf);
+        const double ti = interp_all(g, SHL_INTERP_HERMITE, 1, 3, verts, out);
+        double emax, emean;
+        field_error(out, ref, &emax, &emean);
+        const double tg = tf + ti;
+        if (crossover < 0 && tg < tv) crossover = nl;
+        printf("| %d | %.1f | %.2f | %.2f | %.2f | %.1fx | %.1e | %.1e |\n", nl, tv * 1e3, tf * 1e3, ti * 1e3, tg * 1e3,
+               tv / tg, emax, emean);
+        if (csv) fprintf(csv, "fig8,lights%d,%d,%.6e,%.6e\n", nl, NVERT, tv, tg);
+        shl_grid_destroy(g);
+        shl_lights_destroy(l);
+    }
+    if (crossover > 0)
+        printf("\nCrossover: the grid pipeline is faster from %d light(s) on.\n", crossover);
+    else
+        printf("\nCrossover: the grid pipeline was never faster up to 512 lights.\n");
+
+    enum { NLR = 32 };
+    shl_lights *l = subdivided_light(NLR);
+    must(shl_lights_eval_batch(ctx, l, NVERT, verts, ref, NULL), "per-vertex");
+    printf("\n## Wu 2020 Fig. 9: grid resolution vs time and error (%d triangle lights, lmax %d, one thread)\n\n", NLR, MLMAX);
+    int bpn;
+    must(shl_grid_bytes_per_node(MLMAX, SHL_GRID_FLOAT, &bpn), "bytes");
+    printf("Float nodes: %d bytes per node (3 colours x (value + 3 gradients) x %d coefficients x 4 bytes).\n"
+           "Errors relative to max |L00| over all vertices, colours and coefficients.  Times: best of 3 (fill of 32^3: 1).\n\n",
+           bpn, MNC);
+    printf("| grid | memory KiB | fill ms | Hermite interp ms | Hermite max / mean err | trilinear max / mean err | Taylor (b=2) max / mean err |\n"
+           "|---|---|---|---|---|---|---|\n");
+    for (int res = 4; res <= 32; res *= 2) {
+        double tf, e[3][2];
+        shl_grid *g = filled_grid(ctx, l, lo, hi, res, 1, res < 32 ? 3 : 1, &tf);
+        const double ti = interp_all(g, SHL_INTERP_HERMITE, 1, 3, verts, out);
+        field_error(out, ref, &e[0][0], &e[0][1]);
+        interp_all(g, SHL_INTERP_TRILINEAR, 1, 1, verts, out);
+        field_error(out, ref, &e[1][0], &e[1][1]);
+        interp_all(g, SHL_INTERP_TAYLOR, 1, 1, verts, out);
+        field_error(out, ref, &e[2][0], &e[2][1]);
+        printf("| %d^3 | %.0f | %.1f | %.2f | %.1e / %.1e | %.1e / %.1e | %.1e / %.1e |\n", res,
+               (double)res * res * res * bpn / 1024.0, tf * 1e3, ti * 1e3, e[0][0], e[0][1], e[1][0], e[1][1], e[2][0], e[2][1]);
+        if (csv) fprintf(csv, "fig9,res%d,%d,%.6e,%.6e\n", res, NVERT, tf + ti, e[0][0]);
+        shl_grid_destroy(g);
+    }
+
+    printf("\n## Thread scaling, 16^3 grid, %d lights, %d vertices (best of 3)\n\n"
+           "| step | 1 thread ms | 2 threads ms | speed-up |\n|---|---|---|---|\n", NLR, NVERT);
+    double tf1, tf2;
+    shl_grid *g1 = filled_grid(ctx, l, lo, hi, 16, 1, 3, &tf1), *g2 = filled_grid(ctx, l, lo, hi, 16, 2, 3, &tf2);
+    const double ti1 = interp_all(g1, SHL_INTERP_HERMITE, 1, 5, verts, out), ti2 = interp_all(g1, SHL_INTERP_HERMITE, 2, 5, verts, out);
+    printf("| grid fill | %.1f | %.1f | %.2fx |\n", tf1 * 1e3, tf2 * 1e3, tf1 / tf2);
+    printf("| Hermite interpolation | %.2f | %.2f | %.2fx |\n", ti1 * 1e3, ti2 * 1e3, ti1 / ti2);
+    printf("\nHermite interpolation, one thread: %.0f ns per vertex (%d coefficients x 3 colours).\n", ti1 / NVERT * 1e9, MNC);
+    if (csv) {
+        fprintf(csv, "threads,fill16,%d,%.6e,%.6e\n", NLR, tf1, tf2);
+        fprintf(csv, "threads,interp,%d,%.6e,%.6e\n", NVERT, ti1, ti2);
+    }
+    shl_grid_destroy(g1);
+    shl_grid_destroy(g2);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+    free(verts);
+    free(ref);
+    free(out);
+}
+
+int main(int argc, char **argv)
+{
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
+    char path[512];
+    snprintf(path, sizeof path, "%s/bench_grid.csv", dir);
+    csv = fopen(path, "w");
+    if (csv) fprintf(csv, "section,case,count,value1,value2\n");
+    const double t0 = bench_now();
+    bench_print_machine(stdout);
+    FILE *la = fopen("/proc/loadavg", "r");
+    char load[64] = "unknown";
+    if (la) {
+        if (!fgets(load, sizeof load, la)) snprintf(load, sizeof load, "unknown");
+        load[strcspn(load, "\n")] = '\0';
+        fclose(la);
+    }
+    printf("Load average at start (other processes share the 2 cores): %s\n", load);
+    fig4(dir);
+    fig6();
+    grad_cost();
+    many_lights();
+    printf("\n(total %.0f s; checksum %g)\n", bench_now() - t0, (double)bench_sink);
+    if (csv) fclose(csv);
+    return 0;
+}

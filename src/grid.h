@@ -1,0 +1,21 @@
+/* Regular SH grids: internal layout shared by grid.c and interp.c. */
+#ifndef SHL_GRID_H
+#define SHL_GRID_H
+
+#include "internal.h"
+
+/* Node (i, j, k) is number i + res[0] * (j + res[1] * k); its node_len =
+ * 12 nc elements are the values rgb[c*nc + k] (3 nc) followed by the gradients
+ * grad[(c*3 + a)*nc + k] (9 nc), the layout of shl_lights_eval. */
+struct shl_grid {
+    int lmax, nc, storage;   /* storage: SHL_GRID_FLOAT or SHL_GRID_DOUBLE */
+    int res[3];
+    double lo[3], hi[3], h[3]; /* h: node spacing (hi - lo) / (res - 1) */
+    size_t nnodes, node_len;
+    void *data;
+};
+
+/* Position of node idx (the last node of an axis is exactly hi). */
+void shl__grid_node_pos(const shl_grid *g, const int idx[3], double pos[3]);
+
+#endif

@@ -1,0 +1,128 @@
+/* Interpolation of grid coefficients at arbitrary points (Wu et al. 2020,
+ * Alg. 1 lines 9-16): trilinear, first-order Taylor blended by inverse
+ * distance (Annen et al. 2004, Eq. 14-16), tricubic Hermite (Wu 2020 Alg. 4). */
+#include "grid.h"
+#include "parallel.h"
+#include <math.h>
+
+/* Per-point quantities shared by the kernels of interp_kernel.h. */
+typedef struct {
+    size_t ofs[8];   /* element offset of corner j = ix + 2 iy + 4 iz */
+    double u[3];     /* position in the cell, [0, 1] per axis */
+    double w[8];     /* trilinear or Taylor (Annen Eq. 16) weights */
+    double wd[8][3]; /* Taylor: w_j (p - p_j) */
+    double hw[3][4]; /* Hermite basis per axis: value L, slope L, value R, slope R (slopes x spacing) */
+} point_setup;
+
+#define ELEM float
+#define SUFFIX(name) name##_f
+#include "interp_kernel.h"
+#undef ELEM
+#undef SUFFIX
+#define ELEM double
+#define SUFFIX(name) name##_d
+#include "interp_kernel.h"
+#undef ELEM
+#undef SUFFIX
+
+/* Cell and local coordinates of p, clamped to the box. */
+static void locate(const shl_grid *g, const double p[3], point_setup *s)
+{
+    int cell[3];
+    for (int a = 0; a < 3; ++a) {
+        const double t = (fmin(fmax(p[a], g->lo[a]), g->hi[a]) - g->lo[a]) / g->h[a];
+        cell[a] = t < g->res[a] - 1 ? (int)t : g->res[a] - 2;
+        s->u[a] = fmin(t - cell[a], 1.0);
+    }
+    for (int j = 0; j < 8; ++j) {
+        const size_t ix = (size_t)cell[0] + (j & 1), iy = (size_t)cell[1] + ((j >> 1) & 1), iz = (size_t)cell[2] + (j >> 2);
+        s->ofs[j] = (ix + (size_t)g->res[0] * (iy + (size_t)g->res[1] * iz)) * g->node_len;
+    }
+}
+
+static void trilinear_weights(point_setup *s)
+{
+    for (int j = 0; j < 8; ++j)
+        s->w[j] = (j & 1 ? s->u[0] : 1.0 - s->u[0]) * (j & 2 ? s->u[1] : 1.0 - s->u[1]) *
+                  (j & 4 ? s->u[2] : 1.0 - s->u[2]);
+}
+
+/* Annen 2004 Eq. (16), w_j = |p - p_j|^-b / sum_i |p - p_i|^-b, evaluated as
+ * (d_min / d_j)^b normalized so that nothing overflows; at a node, its value. */
+static void taylor_weights(const shl_grid *g, double b, point_setup *s)
+{
+    double d[8][3], dist[8], dmin = INFINITY, sum = 0.0;
+    for (int j = 0; j < 8; ++j) {
+        for (int a = 0; a < 3; ++a) d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
+        dist[j] = sqrt(d[j][0] * d[j][0] + d[j][1] * d[j][1] + d[j][2] * d[j][2]);
+        dmin = fmin(dmin, dist[j]);
+    }
+    for (int j = 0; j < 8; ++j) {
+        s->w[j] = dmin > 0.0 ? pow(dmin / dist[j], b) : (double)(dist[j] == 0.0);
+        sum += s->w[j];
+    }
+    for (int j = 0; j < 8; ++j) {
+        s->w[j] /= sum;
+        for (int a = 0; a < 3; ++a) s->wd[j][a] = s->w[j] * d[j][a];
+    }
+}
+
+/* Cubic Hermite basis on [0, 1] (Wu 2020 Eq. 33-35 with x_L = 0, x_R = h):
+ * q = (1+2u)(1-u)^2 f_L + u(1-u)^2 h f'_L + u^2(3-2u) f_R - u^2(1-u) h f'_R, exact at u = 0, 1. */
+static void hermite_weights(const shl_grid *g, point_setup *s)
+{
+    for (int a = 0; a < 3; ++a) {
+        const double u = s->u[a], v = 1.0 - u;
+        s->hw[a][0] = (1.0 + 2.0 * u) * v * v;
+        s->hw[a][1] = u * v * v * g->h[a];
+        s->hw[a][2] = u * u * (3.0 - 2.0 * u);
+        s->hw[a][3] = -u * u * v * g->h[a];
+    }
+}
+
+typedef struct {
+    const shl_grid *g;
+    int method;
+    double b;
+    const double *pts;
+    double *out;
+} interp_job;
+
+static void interp_range(void *arg, int worker, long begin, long end)
+{
+    const interp_job *job = arg;
+    const shl_grid *g = job->g;
+    const size_t nv = 3 * (size_t)g->nc;
+    (void)worker;
+    for (long p = begin; p < end; ++p) {
+        point_setup s;
+        locate(g, job->pts + 3 * p, &s);
+        if (job->method == SHL_INTERP_TAYLOR)
+            taylor_weights(g, job->b, &s);
+        else if (job->method == SHL_INTERP_HERMITE)
+            hermite_weights(g, &s);
+        else
+            trilinear_weights(&s);
+        if (g->storage == SHL_GRID_DOUBLE)
+            interp_d(g, job->method, &s, job->out + nv * (size_t)p);
+        else
+            interp_f(g, job->method, &s, job->out + nv * (size_t)p);
+    }
+}
+
+int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
+                    double *rgb, int nthreads)
+{
+    if (!grid || !pts || !rgb) return SHL_ENULL;
+    if (method != SHL_INTERP_TRILINEAR && method != SHL_INTERP_TAYLOR && method != SHL_INTERP_HERMITE)
+        return SHL_EDOMAIN;
+    if (method == SHL_INTERP_TAYLOR) {
+        if (!isfinite(taylor_b)) return SHL_ENONFINITE;
+        if (!(taylor_b > 0.0)) return SHL_EDOMAIN;
+    }
+    if (npts < 0 || nthreads < 1 || nthreads > SHL_MAX_THREADS) return SHL_EDOMAIN;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    interp_job job = {grid, method, taylor_b, pts, rgb};
+    return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
+}

@@ -1,0 +1,34 @@
+/* Light sets: internal records and the accumulation kernel shared with the grid. */
+#ifndef SHL_LIGHTS_H
+#define SHL_LIGHTS_H
+
+#include "internal.h"
+
+/* Kind tag of a light record; other kinds (spheres) add a tag and a case in lights.c. */
+enum { SHL__LIGHT_POLYGON = 1 };
+
+typedef struct {
+    int kind;
+    int two_sided;     /* 0: emits only toward `normal` */
+    double rgb[3];     /* radiance per colour channel */
+    int n;             /* polygon: vertex count */
+    size_t vofs;       /* polygon: first coordinate in shl_lights.verts */
+    double normal[3];  /* polygon: Newell normal sum_i (v_i - v_0) x (v_i+1 - v_0) */
+} shl__light;
+
+struct shl_lights {
+    shl__light *items;
+    int count, cap;
+    double *verts;     /* polygon vertices, xyz interleaved */
+    size_t nverts, vcap; /* doubles used / allocated */
+};
+
+/* Doubles of workspace shl__lights_eval needs at lmax. */
+size_t shl__lights_ws_size(int lmax);
+
+/* Sum of all lights at x into rgb[3*nc] and, if grad != NULL, grad[9*nc]
+ * (layouts of shl_lights_eval); inputs already validated. */
+void shl__lights_eval(const shl_lights *lights, int lmax, double *ws, const double x[3],
+                      double *rgb, double *grad);
+
+#endif

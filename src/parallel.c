@@ -1,0 +1,97 @@
+/* Parallel loop: threads wait at a start gate until all of them exist, then
+ * claim chunks from a shared counter.  Results must not depend on which
+ * worker runs a chunk (every caller writes per-item outputs only). */
+#include "parallel.h"
+#include <pthread.h>
+
+#ifdef SHL_ALLOC_HOOKS
+long shl__thread_fail_after = -1; /* tests: the N-th thread creation fails (< 0: never) */
+static int create_should_fail(void)
+{
+    if (shl__thread_fail_after < 0) return 0;
+    if (shl__thread_fail_after == 0) return 1;
+    --shl__thread_fail_after;
+    return 0;
+}
+#else
+static int create_should_fail(void) { return 0; }
+#endif
+
+typedef struct {
+    pthread_mutex_t lock;
+    pthread_cond_t gate;
+    int state; /* 0: wait, 1: run, -1: abort */
+    long next, n, grain;
+    shl__range_fn fn;
+    void *arg;
+} pool;
+
+typedef struct {
+    pool *p;
+    int worker;
+} worker_arg;
+
+static void run_chunks(pool *p, int worker)
+{
+    for (;;) {
+        pthread_mutex_lock(&p->lock);
+        const long begin = p->next;
+        if (begin < p->n) p->next = begin + (p->n - begin < p->grain ? p->n - begin : p->grain);
+        const long end = p->next;
+        pthread_mutex_unlock(&p->lock);
+        if (begin >= p->n) return;
+        p->fn(p->arg, worker, begin, end);
+    }
+}
+
+static void *thread_main(void *arg)
+{
+    const worker_arg *w = arg;
+    pool *p = w->p;
+    pthread_mutex_lock(&p->lock);
+    while (p->state == 0) pthread_cond_wait(&p->gate, &p->lock);
+    const int run = p->state > 0;
+    pthread_mutex_unlock(&p->lock);
+    if (run) run_chunks(p, w->worker);
+    return NULL;
+}
+
+int shl__parallel_workers(long n, long grain, int nthreads)
+{
+    const long chunks = n > 0 ? (n + grain - 1) / grain : 1;
+    return chunks < nthreads ? (int)chunks : nthreads;
+}
+
+int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg)
+{
+    const int nw = shl__parallel_workers(n, grain, nthreads);
+    if (nw <= 1) {
+        if (n > 0) fn(arg, 0, 0, n);
+        return SHL_OK;
+    }
+    pool p = {.state = 0, .next = 0, .n = n, .grain = grain, .fn = fn, .arg = arg};
+    if (pthread_mutex_init(&p.lock, NULL)) return SHL_ETHREAD;
+    if (pthread_cond_init(&p.gate, NULL)) {
+        pthread_mutex_destroy(&p.lock);
+        return SHL_ETHREAD;
+    }
+    pthread_t tid[SHL_MAX_THREADS];
+    worker_arg wa[SHL_MAX_THREADS];
+    int started = 0;
+    for (int w = 1; w < nw; ++w) {
+        wa[w].p = &p;
+        wa[w].worker = w;
+        if (create_should_fail() || pthread_create(&tid[w], NULL, thread_main, &wa[w])) break;
+        ++started;
+    }
+    const int ok = started == nw - 1;
+    pthread_mutex_lock(&p.lock);
+    p.state = ok ? 1 : -1;
+    pthread_cond_broadcast(&p.gate);
+    pthread_mutex_unlock(&p.lock);
+    if (ok) run_chunks(&p, 0);
+    for (int w = 1; w <= started; ++w) pthread_join(tid[w], NULL);
+    pthread_cond_destroy(&p.gate);
+    pthread_mutex_destroy(&p.lock);
+    return ok ? SHL_OK : SHL_ETHREAD;
+}

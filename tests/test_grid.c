@@ -1,0 +1,535 @@
+/* SH grids: fill against direct evaluation, thread independence, exactness of
+ * the three interpolants on polynomial fields, accuracy on a real light field
+ * (Wu 2020 Fig. 4 setup), clamping, bad input, allocation and thread failures. */
+#include "geom.h"
+#include "harness.h"
+#include "internal.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+extern long shl__alloc_fail_after;
+extern long shl__thread_fail_after;
+
+enum { LMAX = 4, NC = SHL_NCOEFFS(LMAX), NV = 3 * NC, NG = 9 * NC };
+
+static const double quad_light[12] = {-1.0, -0.5, 1.5, 1.0, -0.5, 1.5, 1.0, 0.5, 1.5, -1.0, 0.5, 1.5};
+
+static shl_lights *two_lights(void)
+{
+    shl_lights *l;
+    const double tri[9] = {0.5, 1.0, 2.0, 1.5, 1.2, 1.8, 0.8, 1.9, 2.2}, rgb1[3] = {1.0, 0.8, 0.6}, rgb2[3] = {0.2, 0.4, 3.0};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_polygon(l, quad_light, 4, rgb1, 0) == SHL_OK); /* faces +z: lights z > 1.5 only */
+    CHECK(shl_lights_add_polygon(l, quad_light, 4, rgb2, 1) == SHL_OK);
+    CHECK(shl_lights_add_polygon(l, tri, 3, rgb2, 1) == SHL_OK);
+    return l;
+}
+
+static shl_grid *new_grid(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3], int storage)
+{
+    shl_grid *g = NULL;
+    CHECK(shl_grid_create(ctx, lo, hi, res, storage, &g) == SHL_OK);
+    return g;
+}
+
+SHL_TEST(grid_bytes_per_node)
+{
+    int bf = -1, bd = -1; /* 3 colours x (value + 3 gradients) x nc x element size */
+    CHECK(shl_grid_bytes_per_node(4, SHL_GRID_FLOAT, &bf) == SHL_OK && bf == 3 * 4 * 25 * 4);
+    CHECK(shl_grid_bytes_per_node(8, SHL_GRID_DOUBLE, &bd) == SHL_OK && bd == 3 * 4 * 81 * 8);
+    CHECK(shl_grid_bytes_per_node(-1, SHL_GRID_FLOAT, &bf) == SHL_ELMAX);
+    CHECK(shl_grid_bytes_per_node(4, 2, &bf) == SHL_EDOMAIN);
+    CHECK(shl_grid_bytes_per_node(4, SHL_GRID_FLOAT, NULL) == SHL_ENULL);
+    CHECK(bf == 1200 && bd == 7776);
+    harness_note("lmax 4 float: %d bytes/node; lmax 8 double: %d", bf, bd);
+}
+
+/* Every node holds shl_lights_eval at its position: bit for bit in double, rounded in float. */
+SHL_TEST(grid_nodes_equal_direct_evaluation)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l = two_lights();
+    const double lo[3] = {-1.0, -0.8, -0.5}, hi[3] = {1.2, 0.9, 1.0};
+    const int res[3] = {3, 4, 5};
+    shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE), *gf = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(gd, l, 1) == SHL_OK);
+    CHECK(shl_grid_fill(gf, l, 2) == SHL_OK);
+    int bad = 0;
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                double x[3], want[NV], want_g[NG], got[NV], got_g[NG];
+                CHECK(shl_grid_node_position(gd, idx, x) == SHL_OK);
+                for (int a = 0; a < 3; ++a)
+                    CHECK(x[a] == (idx[a] == res[a] - 1 ? hi[a] : lo[a] + idx[a] * (hi[a] - lo[a]) / (res[a] - 1)));
+                CHECK(shl_lights_eval(ctx, l, x, want, want_g) == SHL_OK);
+                CHECK(shl_grid_get_node(gd, idx, got, got_g) == SHL_OK);
+                bad += memcmp(got, want, sizeof got) != 0 || memcmp(got_g, want_g, sizeof got_g) != 0;
+                CHECK(shl_grid_get_node(gf, idx, got, got_g) == SHL_OK);
+                for (int c = 0; c < NV; ++c) bad += got[c] != (double)(float)want[c];
+                for (int c = 0; c < NG; ++c) bad += got_g[c] != (double)(float)want_g[c];
+            }
+    CHECK(bad == 0);
+    shl_grid_destroy(gd);
+    shl_grid_destroy(gf);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+static int grids_equal(const shl_grid *a, const shl_grid *b, const int res[3])
+{
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                double va[NV], ga[NG], vb[NV], gb[NG];
+                shl_grid_get_node(a, idx, va, ga);
+                shl_grid_get_node(b, idx, vb, gb);
+                if (memcmp(va, vb, sizeof va) || memcmp(ga, gb, sizeof ga)) return 0;
+            }
+    return 1;
+}
+
+SHL_TEST(grid_fill_threads_bit_identical)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l = two_lights();
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    const int res[3] = {5, 4, 6};
+    shl_grid *ref = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(ref, l, 1) == SHL_OK);
+    const int threads[4] = {2, 3, 8, SHL_MAX_THREADS};
+    for (int t = 0; t < 4; ++t) {
+        shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+        CHECK(shl_grid_fill(g, l, threads[t]) == SHL_OK);
+        CHECK(grids_equal(ref, g, res));
+        shl_grid_destroy(g);
+    }
+    shl_grid_destroy(ref);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Polynomial test fields: channel ch holds (1 + ch/10) * F(x) + ch. */
+typedef void (*field_fn)(const double x[3], double *f, double g[3]);
+
+static void set_field(shl_grid *grid, const int res[3], field_fn fn)
+{
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                double x[3], f, g[3], v[NV], gr[NG];
+                shl_grid_node_position(grid, idx, x);
+                fn(x, &f, g);
+                for (int c = 0; c < 3; ++c)
+                    for (int m = 0; m < NC; ++m) {
+                        const double s = 1.0 + (c * NC + m) / 10.0;
+                        v[c * NC + m] = s * f + (c * NC + m);
+                        for (int a = 0; a < 3; ++a) gr[(c * 3 + a) * NC + m] = s * g[a];
+                    }
+                CHECK(shl_grid_set_node(grid, idx, v, gr) == SHL_OK);
+            }
+}
+
+/* max over random points in the box (and on its faces) of |interp - field| / max|field| */
+static double field_error(const shl_grid *grid, int method, double b, const double lo[3], const double hi[3], field_fn fn)
+{
+    enum { NP = 300 };
+    static double pts[3 * NP], out[NP * NV];
+    rng_t r = {99};
+    for (int p = 0; p < NP; ++p)
+        for (int a = 0; a < 3; ++a) {
+            pts[3 * p + a] = rng_range(&r, lo[a], hi[a]);
+            if (p % 10 == a) pts[3 * p + a] = p % 20 < 10 ? lo[a] : hi[a];
+        }
+    CHECK(shl_grid_interp(grid, method, b, NP, pts, out, 1) == SHL_OK);
+    double err = 0.0, scale = 0.0;
+    for (int p = 0; p < NP; ++p) {
+        double f, g[3];
+        fn(pts + 3 * p, &f, g);
+        for (int ch = 0; ch < NV; ++ch) {
+            const double want = (1.0 + ch / 10.0) * f + ch;
+            err = fmax(err, fabs(out[p * NV + ch] - want));
+            scale = fmax(scale, fabs(want));
+        }
+    }
+    return err / scale;
+}
+
+/* In the exact space of Wu 2020 Alg. 4 (see shl_grid_interp): cubics in each
+ * variable, xyz, x y^3, y z^3, x z^3, x y z^3. */
+static void cubic_field(const double x[3], double *f, double g[3])
+{
+    const double X = x[0], Y = x[1], Z = x[2];
+    *f = 0.3 + X - 2 * Y + 0.5 * Z + X * X * X - 0.7 * Y * Y + 0.4 * Y * Y * Y - 0.9 * Z * Z * Z + 1.1 * X * Y * Z +
+         0.6 * X * Y * Y * Y - 0.8 * Y * Z * Z * Z + 0.5 * X * Z * Z * Z + 0.3 * X * Y * Z * Z * Z + 0.2 * X * Y;
+    g[0] = 1 + 3 * X * X + 1.1 * Y * Z + 0.6 * Y * Y * Y + 0.5 * Z * Z * Z + 0.3 * Y * Z * Z * Z + 0.2 * Y;
+    g[1] = -2 - 1.4 * Y + 1.2 * Y * Y + 1.1 * X * Z + 1.8 * X * Y * Y - 0.8 * Z * Z * Z + 0.3 * X * Z * Z * Z + 0.2 * X;
+    g[2] = 0.5 - 2.7 * Z * Z + 1.1 * X * Y - 2.4 * Y * Z * Z + 1.5 * X * Z * Z + 0.9 * X * Y * Z * Z;
+}
+
+/* x^2 y: outside that space (d/dy = x^2 is carried linearly along x). */
+static void x2y_field(const double x[3], double *f, double g[3])
+{
+    *f = x[0] * x[0] * x[1];
+    g[0] = 2 * x[0] * x[1];
+    g[1] = x[0] * x[0];
+    g[2] = 0.0;
+}
+
+static void trilinear_field(const double x[3], double *f, double g[3])
+{
+    *f = 0.5 + 2 * x[0] - x[1] + 3 * x[2] + 0.7 * x[0] * x[1] - 0.4 * x[1] * x[2] + 0.3 * x[0] * x[2] + 1.3 * x[0] * x[1] * x[2];
+    g[0] = 2 + 0.7 * x[1] + 0.3 * x[2] + 1.3 * x[1] * x[2];
+    g[1] = -1 + 0.7 * x[0] - 0.4 * x[2] + 1.3 * x[0] * x[2];
+    g[2] = 3 - 0.4 * x[1] + 0.3 * x[0] + 1.3 * x[0] * x[1];
+}
+
+static void linear_field(const double x[3], double *f, double g[3])
+{
+    *f = 0.5 + 2 * x[0] - x[1] + 3 * x[2];
+    g[0] = 2;
+    g[1] = -1;
+    g[2] = 3;
+}
+
+/* Reproduction on double grids: the error is rounding only (values ~ 10, a few
+ * dozen operations: tolerance 1e-13 relative to the largest value). */
+SHL_TEST(grid_interp_reproduces_polynomials)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    const double lo[3] = {-1.0, -0.5, 0.2}, hi[3] = {1.3, 1.0, 1.1};
+    const int res[3] = {4, 6, 3};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    set_field(g, res, cubic_field);
+    const double e_herm = field_error(g, SHL_INTERP_HERMITE, 0, lo, hi, cubic_field);
+    set_field(g, res, x2y_field);
+    const double e_x2y = field_error(g, SHL_INTERP_HERMITE, 0, lo, hi, x2y_field);
+    set_field(g, res, trilinear_field);
+    const double e_tri = field_error(g, SHL_INTERP_TRILINEAR, 0, lo, hi, trilinear_field);
+    const double e_herm_tri = field_error(g, SHL_INTERP_HERMITE, 0, lo, hi, trilinear_field);
+    set_field(g, res, linear_field);
+    double e_tay = 0.0;
+    const double bs[4] = {0.5, 1.0, 2.0, 8.0};
+    for (int i = 0; i < 4; ++i) e_tay = fmax(e_tay, field_error(g, SHL_INTERP_TAYLOR, bs[i], lo, hi, linear_field));
+    CHECK(e_herm <= 1e-13 && e_herm_tri <= 1e-13 && e_tri <= 1e-13 && e_tay <= 1e-13);
+    CHECK(e_x2y > 1e-4); /* documented limit of Alg. 4's linear gradient interpolation */
+    harness_note("Hermite cubic %.1e, Hermite trilinear %.1e, trilinear %.1e, Taylor linear (b 0.5..8) %.1e; "
+                 "Hermite on x^2 y %.1e (not exact by design)", e_herm, e_herm_tri, e_tri, e_tay, e_x2y);
+    shl_grid_destroy(g);
+    shl_ctx_destroy(ctx);
+}
+
+/* At the nodes all three methods return the node values; across cell faces
+ * the Hermite interpolant is continuous.  Random node data (values and gradients). */
+SHL_TEST(grid_interp_node_values_and_continuity)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    const double lo[3] = {-0.3, 0.1, -2.0}, hi[3] = {0.7, 0.9, 1.0};
+    const int res[3] = {5, 3, 4};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    rng_t r = {17};
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                double v[NV], gr[NG];
+                for (int c = 0; c < NV; ++c) v[c] = rng_range(&r, -1, 1);
+                for (int c = 0; c < NG; ++c) gr[c] = rng_range(&r, -1, 1);
+                CHECK(shl_grid_set_node(g, idx, v, gr) == SHL_OK);
+            }
+    double worst = 0.0;
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                double x[3], v[NV], out[NV];
+                shl_grid_node_position(g, idx, x);
+                shl_grid_get_node(g, idx, v, NULL);
+                for (int m = 0; m < 3; ++m) {
+                    CHECK(shl_grid_interp(g, m, 2.0, 1, x, out, 1) == SHL_OK);
+                    for (int c = 0; c < NV; ++c) worst = fmax(worst, fabs(out[c] - v[c]));
+                }
+            }
+    CHECK(worst <= 1e-14); /* |values| <= 1; only the local coordinate's rounding remains */
+    /* continuity: points 1e-12 on either side of interior node planes */
+    double jump = 0.0;
+    for (int it = 0; it < 50; ++it) {
+        const int a = it % 3, plane = 1 + it % (res[a] - 2);
+        double p[6];
+        for (int b = 0; b < 3; ++b) p[b] = p[3 + b] = rng_range(&r, lo[b], hi[b]);
+        const double at = lo[a] + plane * (hi[a] - lo[a]) / (res[a] - 1);
+        p[a] = at - 1e-12;
+        p[3 + a] = at + 1e-12;
+        double out[2 * NV];
+        CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 2, p, out, 1) == SHL_OK);
+        for (int c = 0; c < NV; ++c) jump = fmax(jump, fabs(out[c] - out[NV + c]));
+    }
+    CHECK(jump <= 1e-10); /* slope <= ~10 per unit length x 2e-12 */
+    harness_note("node values max |diff| %.1e; max jump across faces (2e-12 apart) %.1e", worst, jump);
+    shl_grid_destroy(g);
+    shl_ctx_destroy(ctx);
+}
+
+/* Wu 2020 Fig. 4 setup: coefficient (7,2) of a rectangular light along a line,
+ * 10 samples with analytic gradients; a 10 x 2 x 2 grid whose y and z extent is
+ * 1e-6 reduces every method to 1D along the line.  Errors over 400 points
+ * against per-point evaluation, relative to max |L_72| on the line. */
+SHL_TEST(grid_interp_real_light_line)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(7, &ctx) == SHL_OK);
+    enum { N7 = SHL_NCOEFFS(7), K72 = 7 * 8 + 2, NP = 400 };
+    const double rect[12] = {-1.0, -1.0, 2.0, 1.0, -1.0, 2.0, 1.0, 1.0, 2.0, -1.0, 1.0, 2.0}, white[3] = {1, 1, 1};
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_polygon(l, rect, 4, white, 1) == SHL_OK);
+    const double lo[3] = {-2.0, 0.3, 0.0}, hi[3] = {2.0, 0.3 + 1e-6, 1e-6}; /* as bench_grid.c */
+    const int res[3] = {10, 2, 2};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    static double pts[3 * NP], ref[NP * 3 * N7], out[NP * 3 * N7];
+    for (int p = 0; p < NP; ++p) {
+        pts[3 * p] = lo[0] + (hi[0] - lo[0]) * p / (NP - 1);
+        pts[3 * p + 1] = lo[1];
+        pts[3 * p + 2] = lo[2];
+    }
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
+    double scale = 0.0, err[3] = {0, 0, 0};
+    for (int p = 0; p < NP; ++p) scale = fmax(scale, fabs(ref[p * 3 * N7 + K72]));
+    const int methods[3] = {SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR, SHL_INTERP_HERMITE};
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, methods[m], 2.0, NP, pts, out, 1) == SHL_OK);
+        for (int p = 0; p < NP; ++p) err[m] = fmax(err[m], fabs(out[p * 3 * N7 + K72] - ref[p * 3 * N7 + K72]) / scale);
+    }
+    CHECK(err[2] * 10.0 <= err[0] && err[2] * 10.0 <= err[1]);
+    harness_note("max err / max|L72|: trilinear %.2e, Taylor(b=2) %.2e, Hermite %.2e (%.0fx, %.0fx)", err[0], err[1],
+                 err[2], err[0] / err[2], err[1] / err[2]);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* 3D: an 8^3 float grid over a box below a quad light; all coefficients at
+ * 2000 random points, error relative to max |L00|. */
+SHL_TEST(grid_interp_real_light_box)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l;
+    const double white[3] = {1, 1, 1};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_polygon(l, quad_light, 4, white, 1) == SHL_OK);
+    const double lo[3] = {-1.5, -1.5, -1.0}, hi[3] = {1.5, 1.5, 0.5};
+    const int res[3] = {8, 8, 8};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    enum { NP = 2000 };
+    static double pts[3 * NP], ref[NP * NV], out[NP * NV];
+    rng_t r = {4};
+    for (int p = 0; p < NP; ++p)
+        for (int a = 0; a < 3; ++a) pts[3 * p + a] = rng_range(&r, lo[a], hi[a]);
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
+    double scale = 0.0, err[3] = {0, 0, 0}, mean[3] = {0, 0, 0};
+    for (int p = 0; p < NP; ++p) scale = fmax(scale, fabs(ref[p * NV]));
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 2.0, NP, pts, out, 2) == SHL_OK);
+        for (int i = 0; i < NP * NV; ++i) {
+            err[m] = fmax(err[m], fabs(out[i] - ref[i]) / scale);
+            mean[m] += fabs(out[i] - ref[i]) / scale / (NP * NV);
+        }
+    }
+    CHECK(err[2] * 5.0 <= err[0] && err[2] * 5.0 <= err[1]);
+    CHECK(mean[2] * 10.0 <= mean[0] && mean[2] * 10.0 <= mean[1]);
+    harness_note("8^3 float, max/mean err: trilinear %.1e/%.1e, Taylor %.1e/%.1e, Hermite %.1e/%.1e", err[0], mean[0],
+                 err[1], mean[1], err[2], mean[2]);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Outside points equal the interpolant at the clamped point; threads do not change results. */
+SHL_TEST(grid_interp_clamp_and_threads)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l = two_lights();
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    const int res[3] = {4, 4, 4};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(g, l, 1) == SHL_OK);
+    enum { NP = 1000 };
+    static double pts[3 * NP], clamped[3 * NP], a[NP * NV], b[NP * NV];
+    rng_t r = {8};
+    for (int i = 0; i < 3 * NP; ++i) {
+        pts[i] = rng_range(&r, -3.0, 3.0);
+        clamped[i] = fmin(fmax(pts[i], -1.0), 1.0);
+    }
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 1.5, NP, pts, a, 1) == SHL_OK);
+        CHECK(shl_grid_interp(g, m, 1.5, NP, clamped, b, 1) == SHL_OK);
+        CHECK(memcmp(a, b, sizeof a) == 0);
+        const int threads[3] = {2, 3, 64};
+        for (int t = 0; t < 3; ++t) {
+            CHECK(shl_grid_interp(g, m, 1.5, NP, pts, b, threads[t]) == SHL_OK);
+            CHECK(memcmp(a, b, sizeof a) == 0);
+        }
+    }
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(grid_bad_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    enum { N2 = 3 * SHL_NCOEFFS(2) };
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, nan3[3] = {0, NAN, 0};
+    const int res[3] = {2, 3, 2}, res1[3] = {2, 1, 2}, resbig[3] = {2, SHL_GRID_RES_MAX + 1, 2};
+    shl_grid *g = NULL, *out = NULL;
+    CHECK(shl_grid_create(NULL, lo, hi, res, SHL_GRID_FLOAT, &out) == SHL_ENULL);
+    CHECK(shl_grid_create(ctx, NULL, hi, res, SHL_GRID_FLOAT, &out) == SHL_ENULL);
+    CHECK(shl_grid_create(ctx, lo, hi, NULL, SHL_GRID_FLOAT, &out) == SHL_ENULL);
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, NULL) == SHL_ENULL);
+    CHECK(shl_grid_create(ctx, lo, hi, res1, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    CHECK(shl_grid_create(ctx, lo, hi, resbig, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    CHECK(shl_grid_create(ctx, hi, lo, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    CHECK(shl_grid_create(ctx, lo, lo, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    CHECK(shl_grid_create(ctx, lo, hi, res, 7, &out) == SHL_EDOMAIN);
+    CHECK(shl_grid_create(ctx, nan3, hi, res, SHL_GRID_FLOAT, &out) == SHL_ENONFINITE);
+    const double huge_lo[3] = {-1e308, 0, 0}, huge_hi[3] = {1e308, 1, 1};
+    CHECK(shl_grid_create(ctx, huge_lo, huge_hi, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    CHECK(out == NULL);
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_DOUBLE, &g) == SHL_OK);
+
+    const int idx[3] = {1, 2, 1}, bad_idx[3] = {2, 0, 0}, neg_idx[3] = {0, -1, 0};
+    double v[N2 + 1], gr[3 * N2 + 1], pos[4];
+    guard_fill(v, N2 + 1);
+    guard_fill(gr, 3 * N2 + 1);
+    guard_fill(pos, 4);
+    CHECK(shl_grid_node_position(NULL, idx, pos) == SHL_ENULL);
+    CHECK(shl_grid_node_position(g, NULL, pos) == SHL_ENULL);
+    CHECK(shl_grid_node_position(g, idx, NULL) == SHL_ENULL);
+    CHECK(shl_grid_node_position(g, bad_idx, pos) == SHL_EDOMAIN);
+    CHECK(shl_grid_get_node(g, neg_idx, v, gr) == SHL_EDOMAIN);
+    CHECK(shl_grid_get_node(g, idx, NULL, gr) == SHL_ENULL);
+    CHECK(guard_intact(v, N2 + 1) && guard_intact(gr, 3 * N2 + 1) && guard_intact(pos, 4));
+    /* set_node: a NaN anywhere leaves the node untouched */
+    for (int i = 0; i < N2; ++i) v[i] = 1.0;
+    for (int i = 0; i < 3 * N2; ++i) gr[i] = 2.0;
+    gr[3 * N2 - 1] = NAN;
+    CHECK(shl_grid_set_node(g, idx, v, gr) == SHL_ENONFINITE);
+    CHECK(shl_grid_set_node(g, idx, v, NULL) == SHL_ENULL);
+    CHECK(shl_grid_set_node(g, bad_idx, v, gr) == SHL_EDOMAIN);
+    CHECK(shl_grid_set_node(NULL, idx, v, gr) == SHL_ENULL);
+    CHECK(shl_grid_get_node(g, idx, v, gr) == SHL_OK);
+    for (int i = 0; i < N2; ++i) CHECK(v[i] == 0.0);
+    for (int i = 0; i < 3 * N2; ++i) CHECK(gr[i] == 0.0);
+
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_grid_fill(NULL, l, 1) == SHL_ENULL);
+    CHECK(shl_grid_fill(g, NULL, 1) == SHL_ENULL);
+    CHECK(shl_grid_fill(g, l, 0) == SHL_EDOMAIN);
+    CHECK(shl_grid_fill(g, l, SHL_MAX_THREADS + 1) == SHL_EDOMAIN);
+
+    const double pts[6] = {0.5, 0.5, 0.5, 0.1, INFINITY, 0.2};
+    double o[2 * N2 + 1];
+    guard_fill(o, 2 * N2 + 1);
+    CHECK(shl_grid_interp(NULL, SHL_INTERP_HERMITE, 0, 1, pts, o, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 1, NULL, o, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 1, pts, NULL, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp(g, 3, 0, 1, pts, o, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, -1, 0, 1, pts, o, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, 0.0, 1, pts, o, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, -1.0, 1, pts, o, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, NAN, 1, pts, o, 1) == SHL_ENONFINITE);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, -1, pts, o, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 1, pts, o, 0) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 2, pts, o, 1) == SHL_ENONFINITE); /* second point bad */
+    CHECK(guard_intact(o, 2 * N2 + 1));
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, NAN, 1, pts, o, 1) == SHL_OK); /* b is ignored unless Taylor */
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, 0, pts, o, 1) == SHL_OK);
+    CHECK(o[N2] == GUARD_VALUE);
+    shl_grid_destroy(NULL);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Every allocation (create: 2, fill: 1) fails in turn; every thread creation of
+ * a 4-thread fill and interpolation fails in turn: SHL_ENOMEM / SHL_ETHREAD,
+ * outputs untouched, nothing leaked (ASan), the grid still usable. */
+SHL_TEST(grid_alloc_and_thread_failures)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    enum { N2 = 3 * SHL_NCOEFFS(2) };
+    shl_lights *l;
+    const double white[3] = {1, 1, 1};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_polygon(l, quad_light, 4, white, 1) == SHL_OK);
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3}, idx[3] = {1, 1, 1};
+    int nomem = 0;
+    for (long fail = 0;; ++fail) {
+        shl_grid *g = NULL;
+        shl__alloc_fail_after = fail;
+        int st = shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g);
+        if (st == SHL_OK) st = shl_grid_fill(g, l, 2);
+        shl__alloc_fail_after = -1;
+        if (st == SHL_OK) {
+            shl_grid_destroy(g);
+            break;
+        }
+        CHECK(st == SHL_ENOMEM);
+        ++nomem;
+        if (g) {
+            double v[N2];
+            CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0); /* fill wrote nothing */
+            shl_grid_destroy(g);
+        }
+    }
+    CHECK(nomem == 3);
+
+    shl_grid *g = NULL;
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
+    int ethread = 0;
+    for (long fail = 0; fail < 3; ++fail) {
+        shl__thread_fail_after = fail;
+        const int st = shl_grid_fill(g, l, 4);
+        shl__thread_fail_after = -1;
+        CHECK(st == SHL_ETHREAD);
+        ethread += st == SHL_ETHREAD;
+        double v[N2];
+        CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0);
+    }
+    CHECK(shl_grid_fill(g, l, 4) == SHL_OK);
+    enum { NP = 2000 };
+    static double pts[3 * NP], o[NP * N2 + 1], want[NP * N2];
+    for (int i = 0; i < 3 * NP; ++i) pts[i] = -1.0 + 2.0 * i / (3 * NP);
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, NP, pts, want, 1) == SHL_OK);
+    for (long fail = 0; fail < 3; ++fail) {
+        guard_fill(o, NP * N2 + 1);
+        shl__thread_fail_after = fail;
+        const int st = shl_grid_interp(g, SHL_INTERP_HERMITE, 0, NP, pts, o, 4);
+        shl__thread_fail_after = -1;
+        CHECK(st == SHL_ETHREAD);
+        ethread += st == SHL_ETHREAD;
+        CHECK(guard_intact(o, NP * N2 + 1));
+    }
+    CHECK(shl_grid_interp(g, SHL_INTERP_HERMITE, 0, NP, pts, o, 4) == SHL_OK);
+    CHECK(memcmp(o, want, sizeof want) == 0);
+    harness_note("%d allocation failures, %d thread-creation failures handled", nomem, ethread);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}

@@ -1,0 +1,351 @@
+/* Light sets: sums of per-light shl_polygon / shl_polygon_grad scaled by the
+ * radiance, the quadrature reference (ref_quad.c), finite differences,
+ * one-sided emission, bad input and allocation failures. */
+#include "geom.h"
+#include "harness.h"
+#include "internal.h"
+#include "ref_quad.h"
+#include <math.h>
+#include <string.h>
+
+extern long shl__alloc_fail_after;
+
+enum { LMAX = 6, NC = SHL_NCOEFFS(LMAX), NLIGHTS = 5 };
+
+/* A fixed random scene: NLIGHTS polygons (3..6 vertices, one concave) around the origin. */
+typedef struct {
+    double verts[NLIGHTS][18];
+    int n[NLIGHTS];
+    double rgb[NLIGHTS][3];
+} scene;
+
+static void make_scene(scene *s, unsigned seed)
+{
+    rng_t r = {seed};
+    for (int i = 0; i < NLIGHTS; ++i) {
+        double center[3], nrm[3];
+        for (int k = 0; k < 3; ++k) center[k] = rng_range(&r, -2.0, 2.0);
+        center[2] += 3.0; /* above the test points (|x| <= 1) */
+        rng_unit_vector(&r, nrm);
+        s->n[i] = 3 + i % 4;
+        random_polygon(&r, s->n[i], s->n[i] == 6, center, nrm, rng_range(&r, 0.4, 1.2), s->verts[i]);
+        for (int c = 0; c < 3; ++c) s->rgb[i][c] = rng_range(&r, -0.5, 2.0);
+    }
+}
+
+static shl_lights *scene_lights(const scene *s, int two_sided)
+{
+    shl_lights *l = NULL;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    for (int i = 0; i < NLIGHTS; ++i) CHECK(shl_lights_add_polygon(l, s->verts[i], s->n[i], s->rgb[i], two_sided) == SHL_OK);
+    return l;
+}
+
+static double max_abs(const double *v, int n)
+{
+    double m = 0.0;
+    for (int i = 0; i < n; ++i) m = fmax(m, fabs(v[i]));
+    return m;
+}
+
+/* The set equals sum_i rgb_i x shl_polygon(_grad) of light i (the set
+ * accumulates ZH integrals before one reconstruction: rounding differs). */
+SHL_TEST(lights_sum_of_polygons)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 11);
+    shl_lights *l = scene_lights(&s, 1);
+    CHECK(shl_lights_count(l) == NLIGHTS);
+    rng_t r = {5};
+    double worst_v = 0.0, worst_g = 0.0;
+    for (int it = 0; it < 20; ++it) {
+        double x[3], rgb[3 * NC + 1], grad[9 * NC + 1], want[3 * NC], want_g[9 * NC];
+        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0);
+        memset(want, 0, sizeof want);
+        memset(want_g, 0, sizeof want_g);
+        for (int i = 0; i < NLIGHTS; ++i) {
+            double c[NC], g[3 * NC];
+            CHECK(shl_polygon_grad(ctx, x, s.verts[i], s.n[i], c, g) == SHL_OK);
+            for (int ch = 0; ch < 3; ++ch)
+                for (int k = 0; k < NC; ++k) {
+                    want[ch * NC + k] += s.rgb[i][ch] * c[k];
+                    for (int a = 0; a < 3; ++a) want_g[(ch * 3 + a) * NC + k] += s.rgb[i][ch] * g[a * NC + k];
+                }
+        }
+        guard_fill(rgb, 3 * NC + 1);
+        guard_fill(grad, 9 * NC + 1);
+        CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+        CHECK(rgb[3 * NC] == GUARD_VALUE && grad[9 * NC] == GUARD_VALUE);
+        CHECK(all_finite(rgb, 3 * NC) && all_finite(grad, 9 * NC));
+        const double sv = max_abs(want, 3 * NC), sg = max_abs(want_g, 9 * NC);
+        for (int k = 0; k < 3 * NC; ++k) worst_v = fmax(worst_v, fabs(rgb[k] - want[k]) / sv);
+        for (int k = 0; k < 9 * NC; ++k) worst_g = fmax(worst_g, fabs(grad[k] - want_g[k]) / sg);
+        double only[3 * NC]; /* the coefficients do not depend on whether gradients are asked for */
+        CHECK(shl_lights_eval(ctx, l, x, only, NULL) == SHL_OK);
+        CHECK(memcmp(only, rgb, sizeof only) == 0);
+    }
+    /* the sum differs only in summation order: a few ulps of the largest term */
+    CHECK(worst_v <= 1e-13 && worst_g <= 1e-13);
+    harness_note("max rel diff coeffs %.1e, grads %.1e (tol 1e-13)", worst_v, worst_g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* One point against the independent quadrature (ref_quad.c), light by light. */
+SHL_TEST(lights_vs_quadrature_reference)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 12);
+    shl_lights *l = scene_lights(&s, 1);
+    const double x[3] = {0.2, -0.3, 0.1};
+    double rgb[3 * NC], grad[9 * NC], want[3 * NC] = {0}, want_g[9 * NC] = {0};
+    for (int i = 0; i < NLIGHTS; ++i) {
+        double c[NC], g[3 * NC];
+        CHECK(ref_polygon_sh_grad(LMAX, x, s.verts[i], s.n[i], c, g, NULL) == 0);
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < NC; ++k) {
+                want[ch * NC + k] += s.rgb[i][ch] * c[k];
+                for (int a = 0; a < 3; ++a) want_g[(ch * 3 + a) * NC + k] += s.rgb[i][ch] * g[a * NC + k];
+            }
+    }
+    CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+    double ev = 0.0, eg = 0.0;
+    for (int k = 0; k < 3 * NC; ++k) ev = fmax(ev, fabs(rgb[k] - want[k]));
+    for (int k = 0; k < 9 * NC; ++k) eg = fmax(eg, fabs(grad[k] - want_g[k]));
+    ev /= max_abs(want, 3 * NC);
+    eg /= max_abs(want_g, 9 * NC);
+    CHECK(ev <= 1e-10 && eg <= 1e-8); /* the polygon tests' tolerances vs the same reference */
+    harness_note("vs quadrature: coeffs %.1e, grads %.1e", ev, eg);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Set gradient against central differences of the set's own coefficients:
+ * step 1e-4 gives truncation ~ h^2 |f'''| ~ 1e-8 and rounding ~ eps/h ~ 1e-12. */
+SHL_TEST(lights_grad_vs_finite_differences)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 13);
+    shl_lights *l = scene_lights(&s, 0);
+    rng_t r = {7};
+    double worst = 0.0;
+    for (int it = 0; it < 10; ++it) {
+        double x[3], rgb[3 * NC], grad[9 * NC], p[3 * NC], m[3 * NC], fd[9 * NC];
+        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0);
+        CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+        const double h = 1e-4;
+        for (int a = 0; a < 3; ++a) {
+            double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
+            xp[a] += h;
+            xm[a] -= h;
+            CHECK(shl_lights_eval(ctx, l, xp, p, NULL) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, l, xm, m, NULL) == SHL_OK);
+            for (int ch = 0; ch < 3; ++ch)
+                for (int k = 0; k < NC; ++k) fd[(ch * 3 + a) * NC + k] = (p[ch * NC + k] - m[ch * NC + k]) / (2 * h);
+        }
+        const double sc = max_abs(fd, 9 * NC);
+        for (int k = 0; k < 9 * NC; ++k) worst = fmax(worst, fabs(grad[k] - fd[k]) / sc);
+    }
+    CHECK(worst <= 1e-6);
+    harness_note("one-sided set: max |grad - FD| / max|FD| %.1e (tol 1e-6)", worst);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* One-sided emission: the front is where the vertices appear counter-clockwise. */
+SHL_TEST(lights_one_sided)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(4, &ctx) == SHL_OK);
+    enum { N4 = SHL_NCOEFFS(4) };
+    const double tri[9] = {0, 0, 1, 1, 0, 1, 0, 1, 1};              /* (v1-v0)x(v2-v0) = +z */
+    const double star[18] = {1, 0, 1, 0.2, 0.2, 1, 0, 1, 1, -0.2, 0.2, 1, -1, 0, 1, 0, -0.5, 1}; /* concave, CCW from +z */
+    const double white[3] = {1, 1, 1}, rgb[3] = {0.5, 1.5, -2.0};
+    const double *polys[2] = {tri, star};
+    const int ns[2] = {3, 6};
+    for (int pi = 0; pi < 2; ++pi) {
+        shl_lights *one = NULL, *two = NULL;
+        CHECK(shl_lights_create(&one) == SHL_OK && shl_lights_create(&two) == SHL_OK);
+        CHECK(shl_lights_add_polygon(one, polys[pi], ns[pi], rgb, 0) == SHL_OK);
+        CHECK(shl_lights_add_polygon(two, polys[pi], ns[pi], rgb, 1) == SHL_OK);
+        /* front (z > 1), including a point 1e-9 above the plane: identical to two-sided */
+        const double front[3][3] = {{0.2, 0.3, 2.0}, {-3.0, 4.0, 1.5}, {0.1, 0.1, 1.0 + 1e-9}};
+        for (int i = 0; i < 3; ++i) {
+            double a[3 * N4], ga[9 * N4], b[3 * N4], gb[9 * N4];
+            CHECK(shl_lights_eval(ctx, one, front[i], a, ga) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, two, front[i], b, gb) == SHL_OK);
+            CHECK(memcmp(a, b, sizeof a) == 0 && memcmp(ga, gb, sizeof ga) == 0);
+            CHECK(b[0] != 0.0);
+        }
+        /* behind (z < 1, including 1e-9 below) and in the plane (z = 1): nothing */
+        const double back[4][3] = {{0.2, 0.3, 0.0}, {5.0, 5.0, -10.0}, {0.1, 0.1, 1.0 - 1e-9}, {0.1, 0.1, 1.0}};
+        for (int i = 0; i < 4; ++i) {
+            double a[3 * N4], ga[9 * N4], b[3 * N4], gb[9 * N4];
+            CHECK(shl_lights_eval(ctx, one, back[i], a, ga) == SHL_OK);
+            for (int k = 0; k < 3 * N4; ++k) CHECK(a[k] == 0.0);
+            for (int k = 0; k < 9 * N4; ++k) CHECK(ga[k] == 0.0);
+            CHECK(shl_lights_eval(ctx, two, back[i], b, gb) == SHL_OK);
+            if (i < 3) CHECK(b[0] != 0.0); /* two-sided does light the back */
+        }
+        shl_lights_destroy(one);
+        shl_lights_destroy(two);
+    }
+    /* Reversed winding faces -z; a one-sided and the reversed one-sided light together equal one two-sided light. */
+    const double rev[9] = {0, 0, 1, 0, 1, 1, 1, 0, 1};
+    shl_lights *pair = NULL, *two = NULL;
+    CHECK(shl_lights_create(&pair) == SHL_OK && shl_lights_create(&two) == SHL_OK);
+    CHECK(shl_lights_add_polygon(pair, tri, 3, white, 0) == SHL_OK);
+    CHECK(shl_lights_add_polygon(pair, rev, 3, white, 0) == SHL_OK);
+    CHECK(shl_lights_add_polygon(two, tri, 3, white, 1) == SHL_OK);
+    const double pts[6] = {0.3, 0.2, 3.0, 0.3, 0.2, -3.0};
+    double a[2 * 3 * N4], b[2 * 3 * N4];
+    CHECK(shl_lights_eval_batch(ctx, pair, 2, pts, a, NULL) == SHL_OK);
+    CHECK(shl_lights_eval_batch(ctx, two, 2, pts, b, NULL) == SHL_OK);
+    for (int k = 0; k < 2 * 3 * N4; ++k) CHECK_NEAR(a[k], b[k], 1e-15); /* |L00| ~ 0.04: the winding only changes rounding */
+    shl_lights_destroy(pair);
+    shl_lights_destroy(two);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(lights_batch_equals_single_and_empty_set)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 14);
+    shl_lights *l = scene_lights(&s, 0);
+    enum { NP = 7 };
+    double pts[3 * NP], rgb[NP * 3 * NC + 1], grad[NP * 9 * NC + 1];
+    rng_t r = {3};
+    for (int k = 0; k < 3 * NP; ++k) pts[k] = rng_range(&r, -1.0, 1.0);
+    guard_fill(rgb, NP * 3 * NC + 1);
+    guard_fill(grad, NP * 9 * NC + 1);
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, rgb, grad) == SHL_OK);
+    CHECK(rgb[NP * 3 * NC] == GUARD_VALUE && grad[NP * 9 * NC] == GUARD_VALUE);
+    for (int p = 0; p < NP; ++p) {
+        double a[3 * NC], g[9 * NC];
+        CHECK(shl_lights_eval(ctx, l, pts + 3 * p, a, g) == SHL_OK);
+        CHECK(memcmp(a, rgb + p * 3 * NC, sizeof a) == 0 && memcmp(g, grad + p * 9 * NC, sizeof g) == 0);
+    }
+    CHECK(shl_lights_eval_batch(ctx, l, 0, pts, rgb, NULL) == SHL_OK);
+    shl_lights *empty;
+    CHECK(shl_lights_create(&empty) == SHL_OK);
+    CHECK(shl_lights_count(empty) == 0);
+    CHECK(shl_lights_eval(ctx, empty, pts, rgb, grad) == SHL_OK);
+    for (int k = 0; k < 3 * NC; ++k) CHECK(rgb[k] == 0.0);
+    for (int k = 0; k < 9 * NC; ++k) CHECK(grad[k] == 0.0);
+    shl_lights_destroy(empty);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(lights_bad_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    enum { N2 = SHL_NCOEFFS(2) };
+    shl_lights *l;
+    CHECK(shl_lights_create(NULL) == SHL_ENULL);
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    const double tri[9] = {0, 0, 1, 1, 0, 1, 0, 1, 1}, rgb[3] = {1, 1, 1};
+    double bad_v[9], bad_rgb[3] = {1, NAN, 1}, inf_rgb[3] = {1, 1, INFINITY};
+    memcpy(bad_v, tri, sizeof tri);
+    bad_v[4] = NAN;
+    CHECK(shl_lights_add_polygon(NULL, tri, 3, rgb, 0) == SHL_ENULL);
+    CHECK(shl_lights_add_polygon(l, NULL, 3, rgb, 0) == SHL_ENULL);
+    CHECK(shl_lights_add_polygon(l, tri, 3, NULL, 0) == SHL_ENULL);
+    CHECK(shl_lights_add_polygon(l, tri, 2, rgb, 0) == SHL_ENVERTS);
+    CHECK(shl_lights_add_polygon(l, tri, SHL_MAX_VERTS + 1, rgb, 0) == SHL_ENVERTS);
+    CHECK(shl_lights_add_polygon(l, tri, 3, rgb, 2) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_polygon(l, tri, 3, rgb, -1) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_polygon(l, bad_v, 3, rgb, 0) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_polygon(l, tri, 3, bad_rgb, 0) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_polygon(l, tri, 3, inf_rgb, 1) == SHL_ENONFINITE);
+    CHECK(shl_lights_count(l) == 0);
+    CHECK(shl_lights_count(NULL) == SHL_ENULL);
+    CHECK(shl_lights_add_polygon(l, tri, 3, rgb, 1) == SHL_OK);
+
+    const double x[3] = {0.2, 0.2, 0}, xnan[3] = {0, NAN, 0};
+    double out[3 * N2 + 1], g[9 * N2 + 1];
+    guard_fill(out, 3 * N2 + 1);
+    guard_fill(g, 9 * N2 + 1);
+    CHECK(shl_lights_eval(NULL, l, x, out, g) == SHL_ENULL);
+    CHECK(shl_lights_eval(ctx, NULL, x, out, g) == SHL_ENULL);
+    CHECK(shl_lights_eval(ctx, l, NULL, out, g) == SHL_ENULL);
+    CHECK(shl_lights_eval(ctx, l, x, NULL, g) == SHL_ENULL);
+    CHECK(shl_lights_eval(ctx, l, xnan, out, g) == SHL_ENONFINITE);
+    const double pts[6] = {0, 0, 0, 0, 0, INFINITY};
+    CHECK(shl_lights_eval_batch(ctx, l, -1, pts, out, g) == SHL_EDOMAIN);
+    CHECK(shl_lights_eval_batch(ctx, l, 2, pts, out, g) == SHL_ENONFINITE); /* the second point is bad: nothing written */
+    CHECK(shl_lights_eval_batch(ctx, l, 1, NULL, out, g) == SHL_ENULL);
+    CHECK(shl_lights_eval_batch(NULL, l, 1, pts, out, g) == SHL_ENULL);
+    CHECK(guard_intact(out, 3 * N2 + 1) && guard_intact(g, 9 * N2 + 1));
+    shl_lights_destroy(NULL);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Every allocation of create / add (growth of both arrays) / eval / eval_batch
+ * fails in turn: SHL_ENOMEM, the set unchanged and usable, nothing leaked (ASan). */
+SHL_TEST(lights_alloc_failures)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(3, &ctx) == SHL_OK);
+    enum { N3 = SHL_NCOEFFS(3), NADD = 40 };
+    const double quad[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2}, rgb[3] = {1, 0.5, 0.25};
+    const double x[3] = {0.1, 0.2, 0.3};
+    double want[3 * N3];
+    int failures = 0;
+    for (long fail = 0;; ++fail) {
+        shl_lights *l = NULL;
+        shl__alloc_fail_after = fail;
+        int st = shl_lights_create(&l);
+        int added = 0;
+        for (int i = 0; st == SHL_OK && i < NADD; ++i) {
+            st = shl_lights_add_polygon(l, quad, 4, rgb, 1);
+            if (st == SHL_OK) ++added;
+            else CHECK(shl_lights_count(l) == added);
+        }
+        double out[3 * N3 + 1], g[9 * N3 + 1], bout[3 * N3 + 1], bg[9 * N3 + 1];
+        guard_fill(out, 3 * N3 + 1);
+        guard_fill(g, 9 * N3 + 1);
+        guard_fill(bout, 3 * N3 + 1);
+        guard_fill(bg, 9 * N3 + 1);
+        int st_eval = SHL_OK;
+        if (st == SHL_OK) st = st_eval = shl_lights_eval(ctx, l, x, out, g);
+        if (st == SHL_OK) st = shl_lights_eval_batch(ctx, l, 1, x, bout, bg);
+        shl__alloc_fail_after = -1;
+        if (st != SHL_OK) {
+            CHECK(st == SHL_ENOMEM);
+            if (st_eval != SHL_OK) CHECK(guard_intact(out, 3 * N3 + 1) && guard_intact(g, 9 * N3 + 1));
+            CHECK(guard_intact(bout, 3 * N3 + 1) && guard_intact(bg, 9 * N3 + 1));
+            ++failures;
+            if (l) { /* still usable after the failure */
+                CHECK(shl_lights_add_polygon(l, quad, 4, rgb, 1) == SHL_OK);
+                CHECK(shl_lights_count(l) == added + 1);
+                CHECK(shl_lights_eval(ctx, l, x, out, NULL) == SHL_OK);
+            }
+            shl_lights_destroy(l);
+            continue;
+        }
+        /* NADD identical lights: NADD times one light */
+        shl_lights *one;
+        CHECK(shl_lights_create(&one) == SHL_OK);
+        CHECK(shl_lights_add_polygon(one, quad, 4, rgb, 1) == SHL_OK);
+        CHECK(shl_lights_eval(ctx, one, x, want, NULL) == SHL_OK);
+        CHECK(memcmp(out, bout, sizeof(double) * 3 * N3) == 0 && memcmp(g, bg, sizeof(double) * 9 * N3) == 0);
+        for (int k = 0; k < 3 * N3; ++k) CHECK_NEAR(out[k], NADD * want[k], 1e-13 * NADD * fabs(want[0]));
+        shl_lights_destroy(one);
+        shl_lights_destroy(l);
+        break;
+    }
+    CHECK(failures >= 5); /* create, 2 x 3 growths, eval, batch */
+    harness_note("%d allocation points failed in turn", failures);
+    shl_ctx_destroy(ctx);
+}
