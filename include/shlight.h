@@ -115,6 +115,22 @@ void shl_lights_destroy(shl_lights *lights);
  */
 int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const double rgb[3],
                            int two_sided);
+/**
+ * Add (copy) a uniform spherical light: centre center[3], radius, rgb[3] finite
+ * radiance per colour channel (any sign).  Validated as shl_sphere: NULL pointer
+ * SHL_ENULL; center, rgb or radius NaN/infinite SHL_ENONFINITE; radius <= 0
+ * SHL_EDOMAIN.  On error the set is unchanged.
+ * In shl_lights_eval (and hence shl_lights_eval_batch and shl_grid_fill) it adds
+ *   rgb[c*nc + k] += rgb_c * coeffs[k],  grad[(c*3 + a)*nc + k] += rgb_c * grad_s[a*nc + k],
+ * with coeffs, grad_s those of shl_sphere_grad(ctx, x, center, radius, ..) (agreeing
+ * to rounding: the set goes through its shared lobe integrals, zh_l(d) =
+ * K_l P_l(d . axis) times the cap's ZH, Funk-Hecke).  A sphere emits in every
+ * direction (there is no one-sided option).  A point inside or on the sphere
+ * (|center - x| <= radius) is surrounded by it: coefficient 0 gets
+ * rgb_c sqrt(4 pi), every other coefficient and the gradient 0.
+ */
+int shl_lights_add_sphere(shl_lights *lights, const double center[3], double radius,
+                          const double rgb[3]);
 /** Number of lights in the set, or SHL_ENULL. */
 int shl_lights_count(const shl_lights *lights);
 /**
@@ -402,13 +418,15 @@ int shl_hvl_radius_fov(int count, const double *dist, double fov, double scale, 
  * NEON: 4):  point p writes coeffs + nc*p (nc entries) and, if grad != NULL,
  * grad + 3*nc*p (3*nc entries, layout of shl_polygon_grad_f), nc = SHL_NCOEFFS(lmax).
  * Same semantics as the single-point calls (either winding, repeated vertices
- * dropped, a point in the polygon's plane gets zeros), with two limits of the
- * all-float geometry: a point farther than 2^40 times the polygon's extent
- * from every vertex gets zeros, and the plane test is the double one of
- * shl_polygon_f.  pts and coeffs may be NULL when npts is 0.  All points are
- * checked before anything is written.  Allocates a workspace per call of
- * about 4 (lmax+1)^2 (3 lmax + 4) vlen bytes with gradients, a quarter of
- * that without (SHL_ENOMEM); npts < 0: SHL_EDOMAIN.
+ * dropped, a point in the polygon's plane gets zeros, by the same test in
+ * double); a point farther than 2^40 times the polygon's extent gets zeros
+ * (float range).  Accuracy is that of float arithmetic on the whole geometry:
+ * see README "Batch evaluation and SIMD" (the error relative to L00 grows like
+ * 1/angular size for small polygons).  pts and coeffs may be NULL when npts is 0.
+ * All points are checked before anything is written.  Allocates one workspace
+ * per call of 4 vlen (3 nq (lmax+1)^2 + 14 lmax + 1825) + 64 bytes, nq = 4 with
+ * gradients, 1 without (AVX2, lmax 30, gradients: 441 KB; SHL_ENOMEM);
+ * npts < 0: SHL_EDOMAIN.
  */
 int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
                         float *coeffs, float *grad);

@@ -1,10 +1,13 @@
 /* Light sets (Wu et al. 2020, Alg. 1 lines 5-7): the lights' contributions add
  * linearly.  Since the ZH -> SH reconstruction (Wang 2018 Eq. 33) is linear and
- * every polygon uses the same lobe directions, the per-light ZH integrals (and
- * their gradients) are accumulated per colour channel and reconstructed once
- * per point: 3 x 4 reconstructions instead of 4 per light. */
+ * every light's lobe integrals use the same lobe directions, the per-light ZH
+ * integrals (and their gradients) are accumulated per colour channel and
+ * reconstructed once per point: 3 x 4 reconstructions instead of 4 per light.
+ * Spheres (HVL Sec. 4.2) produce the same lobe integrals by Funk-Hecke. */
 #include "lights.h"
 #include "polygon.h"
+#include "sh_ops.h"
+#include "zh_tables.h"
 #include <limits.h>
 #include <stdint.h>
 #include <string.h>
@@ -17,6 +20,66 @@ size_t shl__lights_ws_size(int lmax) { return 4 * (size_t)SHL__ZH_BLOCK + 12 * a
 static double front_distance(const shl__light *li, const double *v0, const double x[3])
 {
     return li->normal[0] * (x[0] - v0[0]) + li->normal[1] * (x[1] - v0[1]) + li->normal[2] * (x[2] - v0[2]);
+}
+
+/* Lobe integrals of a unit-radiance sphere seen from x, layout of shl__poly_zh_grad_d.
+ * By Funk-Hecke the integral of P_l(dir_d . w) over the cap {w : u . w >= cos a}
+ * is P_l(dir_d . u) w_l, w_l = 2 pi int_{cos a}^1 P_l (shl__cap_weights_d, free
+ * of cancellation for small caps), so zh[d][l] = K_l w_l P_l(z_d), z_d = dir_d . u,
+ * K_l = sqrt((2l+1)/(4 pi)).  Gradient (product rule, as in shl__sphere_sh_d):
+ *   d zh[d][l]/dx = K_l (w_l' P_l(z_d) d cos a/dx + w_l P_l'(z_d) d z_d/dx),
+ *   d cos a/dx = -k_alpha u,   d z_d/dx = -(dir_d - z_d u) / |center - x|.
+ * Inside or on the sphere: the whole sphere of directions (only band 0, constant). */
+static void sphere_zh(const shl__light *li, int lmax, const double x[3], double *zh, double *zh_grad)
+{
+    const int ndir = 2 * lmax + 1;
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, x, li->center, li->radius);
+    if (g.inside) {
+        const double full = sqrt(4.0 * M_PI); /* integral of Y_00 over all directions */
+        for (int d = 0; d < ndir; ++d)
+            for (int l = 0; l <= lmax; ++l) zh[d * SHL__ZH_STRIDE + l] = l == 0 ? full : 0.0;
+        for (int a = 0; zh_grad && a < 3; ++a)
+            for (int d = 0; d < ndir; ++d)
+                for (int l = 0; l <= lmax; ++l) zh_grad[a * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l] = 0.0;
+        return;
+    }
+    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], kw[SHL_LMAX_MAX + 1], kdw[SHL_LMAX_MAX + 1];
+    shl__cap_weights_d(lmax, g.t, g.s2, g.c, w, zh_grad ? dw : NULL);
+    for (int l = 0; l <= lmax; ++l) {
+        const double k = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
+        kw[l] = k * w[l];
+        if (zh_grad) kdw[l] = k * dw[l] * g.k_alpha; /* -(d zh / d cos a)(d cos a / dx) . u */
+    }
+    for (int d = 0; d < ndir; ++d) {
+        const double *dir = shl__zh_dir[d];
+        const double z = fmin(1.0, fmax(-1.0, shl__dot3(dir, g.u)));
+        double *out = zh + d * SHL__ZH_STRIDE;
+        double p_prev = 0.0, p = 1.0, dp_prev = 0.0, dp = 0.0; /* P_{l-1}, P_l, P'_{l-1}, P'_l at l = 0 */
+        if (!zh_grad) {
+            for (int l = 0; l <= lmax; ++l) {
+                out[l] = kw[l] * p;
+                const double p_next = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
+                p_prev = p;
+                p = p_next;
+            }
+            continue;
+        }
+        const double tan_dir[3] = {(dir[0] - z * g.u[0]) * g.inv_d, (dir[1] - z * g.u[1]) * g.inv_d,
+                                   (dir[2] - z * g.u[2]) * g.inv_d}; /* -d z_d / dx */
+        double *og = zh_grad + d * SHL__ZH_STRIDE;
+        for (int l = 0; l <= lmax; ++l) {
+            out[l] = kw[l] * p;
+            const double radial = kdw[l] * p, tang = kw[l] * dp;
+            for (int a = 0; a < 3; ++a) og[a * SHL__ZH_BLOCK + l] = -radial * g.u[a] - tang * tan_dir[a];
+            const double p_next = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
+            const double dp_next = dp_prev + (2.0 * l + 1.0) * p; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
+            p_prev = p;
+            p = p_next;
+            dp_prev = dp;
+            dp = dp_next;
+        }
+    }
 }
 
 /* ZH integrals of one unit-radiance light at x into zh (and, with_grad, the
@@ -36,6 +99,9 @@ static int light_zh(const shl_lights *lights, const shl__light *li, int lmax, co
             shl__poly_zh_d(&g, lmax, zh);
         return 1;
     }
+    case SHL__LIGHT_SPHERE: /* emits in every direction: no one-sided case */
+        sphere_zh(li, lmax, x, zh, with_grad ? zh + SHL__ZH_BLOCK : NULL);
+        return 1;
     }
     return 0;
 }
@@ -123,6 +189,7 @@ int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const
     const int st = reserve(lights, 3 * (size_t)n);
     if (st) return st;
     shl__light *li = &lights->items[lights->count];
+    memset(li, 0, sizeof *li);
     li->kind = SHL__LIGHT_POLYGON;
     li->two_sided = two_sided;
     memcpy(li->rgb, rgb, sizeof li->rgb);
@@ -139,6 +206,24 @@ int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const
     }
     memcpy(lights->verts + lights->nverts, verts, sizeof(double) * 3 * (size_t)n);
     lights->nverts += 3 * (size_t)n;
+    ++lights->count;
+    return SHL_OK;
+}
+
+int shl_lights_add_sphere(shl_lights *lights, const double center[3], double radius, const double rgb[3])
+{
+    if (!lights || !center || !rgb) return SHL_ENULL;
+    if (shl__check_finite(center, 3) || shl__check_finite(rgb, 3) || !isfinite(radius)) return SHL_ENONFINITE;
+    if (!(radius > 0.0)) return SHL_EDOMAIN;
+    const int st = reserve(lights, 0);
+    if (st) return st;
+    shl__light *li = &lights->items[lights->count];
+    memset(li, 0, sizeof *li);
+    li->kind = SHL__LIGHT_SPHERE;
+    li->two_sided = 1;
+    memcpy(li->rgb, rgb, sizeof li->rgb);
+    memcpy(li->center, center, sizeof li->center);
+    li->radius = radius;
     ++lights->count;
     return SHL_OK;
 }

@@ -4,16 +4,18 @@
 
 #include "internal.h"
 
-/* Kind tag of a light record; other kinds (spheres) add a tag and a case in lights.c. */
-enum { SHL__LIGHT_POLYGON = 1 };
+/* Kind tag of a light record; each kind has a case in light_zh() (lights.c). */
+enum { SHL__LIGHT_POLYGON = 1, SHL__LIGHT_SPHERE = 2 };
 
 typedef struct {
     int kind;
-    int two_sided;     /* 0: emits only toward `normal` */
+    int two_sided;     /* polygon, 0: emits only toward `normal`; sphere: 1 (emits everywhere) */
     double rgb[3];     /* radiance per colour channel */
     int n;             /* polygon: vertex count */
     size_t vofs;       /* polygon: first coordinate in shl_lights.verts */
     double normal[3];  /* polygon: Newell normal sum_i (v_i - v_0) x (v_i+1 - v_0) */
+    double center[3];  /* sphere: centre */
+    double radius;     /* sphere: radius, finite and > 0 */
 } shl__light;
 
 struct shl_lights {

@@ -5,6 +5,7 @@
 #include "harness.h"
 #include "internal.h"
 #include "ref_quad.h"
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -291,15 +292,16 @@ SHL_TEST(lights_bad_input)
     shl_ctx_destroy(ctx);
 }
 
-/* Every allocation of create / add (growth of both arrays) / eval / eval_batch
- * fails in turn: SHL_ENOMEM, the set unchanged and usable, nothing leaked (ASan). */
+/* Every allocation of create / add (growth of both arrays; polygons and spheres
+ * interleaved, a sphere grows only the record array) / eval / eval_batch fails
+ * in turn: SHL_ENOMEM, the set unchanged and usable, nothing leaked (ASan). */
 SHL_TEST(lights_alloc_failures)
 {
     shl_ctx *ctx;
     CHECK(shl_ctx_create(3, &ctx) == SHL_OK);
     enum { N3 = SHL_NCOEFFS(3), NADD = 40 };
     const double quad[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2}, rgb[3] = {1, 0.5, 0.25};
-    const double x[3] = {0.1, 0.2, 0.3};
+    const double x[3] = {0.1, 0.2, 0.3}, sc[3] = {0.5, -1.0, 1.5};
     double want[3 * N3];
     int failures = 0;
     for (long fail = 0;; ++fail) {
@@ -308,7 +310,7 @@ SHL_TEST(lights_alloc_failures)
         int st = shl_lights_create(&l);
         int added = 0;
         for (int i = 0; st == SHL_OK && i < NADD; ++i) {
-            st = shl_lights_add_polygon(l, quad, 4, rgb, 1);
+            st = i % 2 ? shl_lights_add_sphere(l, sc, 0.4, rgb) : shl_lights_add_polygon(l, quad, 4, rgb, 1);
             if (st == SHL_OK) ++added;
             else CHECK(shl_lights_count(l) == added);
         }
@@ -328,24 +330,256 @@ SHL_TEST(lights_alloc_failures)
             ++failures;
             if (l) { /* still usable after the failure */
                 CHECK(shl_lights_add_polygon(l, quad, 4, rgb, 1) == SHL_OK);
-                CHECK(shl_lights_count(l) == added + 1);
+                CHECK(shl_lights_add_sphere(l, sc, 0.4, rgb) == SHL_OK);
+                CHECK(shl_lights_count(l) == added + 2);
                 CHECK(shl_lights_eval(ctx, l, x, out, NULL) == SHL_OK);
             }
             shl_lights_destroy(l);
             continue;
         }
-        /* NADD identical lights: NADD times one light */
+        /* NADD / 2 identical (polygon, sphere) pairs: NADD / 2 times one pair */
         shl_lights *one;
         CHECK(shl_lights_create(&one) == SHL_OK);
         CHECK(shl_lights_add_polygon(one, quad, 4, rgb, 1) == SHL_OK);
+        CHECK(shl_lights_add_sphere(one, sc, 0.4, rgb) == SHL_OK);
         CHECK(shl_lights_eval(ctx, one, x, want, NULL) == SHL_OK);
         CHECK(memcmp(out, bout, sizeof(double) * 3 * N3) == 0 && memcmp(g, bg, sizeof(double) * 9 * N3) == 0);
-        for (int k = 0; k < 3 * N3; ++k) CHECK_NEAR(out[k], NADD * want[k], 1e-13 * NADD * fabs(want[0]));
+        for (int k = 0; k < 3 * N3; ++k) CHECK_NEAR(out[k], NADD / 2 * want[k], 1e-13 * NADD * fabs(want[0]));
         shl_lights_destroy(one);
         shl_lights_destroy(l);
         break;
     }
-    CHECK(failures >= 5); /* create, 2 x 3 growths, eval, batch */
+    CHECK(failures >= 9); /* create, 4 record + 3 vertex growths, eval, batch */
     harness_note("%d allocation points failed in turn", failures);
     shl_ctx_destroy(ctx);
+}
+
+/* ---- spherical lights --------------------------------------------------- */
+
+/* rgb_c x shl_sphere_grad of one sphere, added to want / want_g (set layouts). */
+static void add_sphere_ref(const shl_ctx *ctx, int nc, const double x[3], const double c[3], double rad,
+                           const double rgb[3], double *want, double *want_g)
+{
+    double co[SHL_NCOEFFS(SHL_LMAX_MAX)], g[3 * SHL_NCOEFFS(SHL_LMAX_MAX)];
+    CHECK(shl_sphere_grad(ctx, x, c, rad, co, g) == SHL_OK);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int k = 0; k < nc; ++k) {
+            want[ch * nc + k] += rgb[ch] * co[k];
+            for (int a = 0; a < 3; ++a) want_g[(ch * 3 + a) * nc + k] += rgb[ch] * g[a * nc + k];
+        }
+}
+
+/* A set holding one sphere equals rgb x shl_sphere / shl_sphere_grad: random
+ * spheres and points, points inside, on the surface and at the centre, a point
+ * just outside, tiny, distant and far-scaled spheres; lmax 0, 1, 6 and 30.
+ * The set goes through the lobe integrals and their reconstruction (cond ~22
+ * per band): coefficients within 1e-13 of the largest one up to lmax 6; at
+ * lmax 30 the reconstruction alone, fed long-double lobe integrals rounded once,
+ * is ~3e-13 away from shl_sphere (shl_sphere itself is within 3e-14 of a
+ * long-double reference), hence 1e-12 there. */
+SHL_TEST(lights_sphere_equals_shl_sphere)
+{
+    enum { LM = SHL_LMAX_MAX, NCM = SHL_NCOEFFS(SHL_LMAX_MAX) };
+    static double rgb[3 * NCM + 1], grad[9 * NCM + 1], want[3 * NCM], want_g[9 * NCM], only[3 * NCM];
+    const int lmaxes[4] = {0, 1, LMAX, LM};
+    const double col[3] = {0.7, -1.3, 2.5};
+    double worst_v = 0.0, worst_v30 = 0.0, worst_g = 0.0;
+    int inside_pts = 0;
+    for (int li = 0; li < 4; ++li) {
+        shl_ctx *ctx;
+        CHECK(shl_ctx_create(lmaxes[li], &ctx) == SHL_OK);
+        const int nc = SHL_NCOEFFS(lmaxes[li]);
+        rng_t r = {21 + (unsigned)li};
+        for (int it = 0; it < 40; ++it) {
+            double x[3], c[3], rad, dir[3];
+            rng_unit_vector(&r, dir);
+            for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0);
+            double d = rng_range(&r, 0.5, 5.0);
+            rad = d * rng_range(&r, 0.02, 0.98);
+            switch (it) {
+            case 0: rad = 1e-9; d = 1.0; break;          /* tiny */
+            case 1: rad = 1e-150; d = 3.0; break;        /* tiny, w_l ~ 1e-300 */
+            case 2: rad = 1.0; d = 1e8; break;           /* distant */
+            case 3: rad = 1e199; d = 3e199; break;       /* far-scaled coordinates */
+            case 4: rad = 2.0; d = 2.0 * (1.0 + 1e-12); break; /* just outside: gradient ~ 1e6 */
+            case 5: rad = 2.0; d = 1.0; break;           /* inside */
+            case 6: rad = 0.5; d = 0.0; break;           /* at the centre */
+            case 7: rad = 4.0; d = 4.0; break;           /* on the surface (d = rad exactly for dir = e_z) */
+            default: break;
+            }
+            for (int k = 0; k < 3; ++k) c[k] = x[k] + d * dir[k];
+            if (it == 3) for (int k = 0; k < 3; ++k) c[k] = d * dir[k], x[k] = 0.0;
+            if (it == 7) { /* dyadic coordinates: |center - x| = 4 = radius exactly */
+                const double xs[3] = {0.25, -0.5, 0.5}, cs[3] = {0.25, -0.5, 4.5};
+                memcpy(x, xs, sizeof xs);
+                memcpy(c, cs, sizeof cs);
+            }
+            const int inside = it >= 5 && it <= 7;
+            shl_lights *l;
+            CHECK(shl_lights_create(&l) == SHL_OK);
+            CHECK(shl_lights_add_sphere(l, c, rad, col) == SHL_OK && shl_lights_count(l) == 1);
+            memset(want, 0, sizeof(double) * 3 * nc);
+            memset(want_g, 0, sizeof(double) * 9 * nc);
+            add_sphere_ref(ctx, nc, x, c, rad, col, want, want_g);
+            guard_fill(rgb, 3 * nc + 1);
+            guard_fill(grad, 9 * nc + 1);
+            CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+            CHECK(rgb[3 * nc] == GUARD_VALUE && grad[9 * nc] == GUARD_VALUE);
+            CHECK(all_finite(rgb, 3 * nc) && all_finite(grad, 9 * nc));
+            CHECK(shl_lights_eval(ctx, l, x, only, NULL) == SHL_OK);
+            CHECK(memcmp(only, rgb, sizeof(double) * 3 * nc) == 0);
+            const double sv = max_abs(want, 3 * nc), sg = max_abs(want_g, 9 * nc);
+            CHECK(sv > 0.0);
+            double ev = 0.0, eg = 0.0;
+            for (int k = 0; k < 3 * nc; ++k) ev = fmax(ev, fabs(rgb[k] - want[k]) / sv);
+            if (inside) { /* the whole sphere of directions: band 0 only, no gradient */
+                ++inside_pts;
+                CHECK(sg == 0.0);
+                for (int k = 0; k < 9 * nc; ++k) CHECK(grad[k] == 0.0);
+                for (int ch = 0; ch < 3; ++ch) {
+                    CHECK_NEAR(rgb[ch * nc], col[ch] * sqrt(4.0 * M_PI), 1e-15 * fabs(col[ch]) * 4.0);
+                    for (int k = 1; k < nc; ++k) CHECK(rgb[ch * nc + k] == 0.0);
+                }
+            } else {
+                CHECK(sg > 0.0);
+                for (int k = 0; k < 9 * nc; ++k) eg = fmax(eg, fabs(grad[k] - want_g[k]) / sg);
+            }
+            const double tol_v = lmaxes[li] <= LMAX ? 1e-13 : 1e-12;
+            if (!(ev <= tol_v && eg <= 1e-12))
+                harness_fail(__FILE__, __LINE__, "lmax %d case %d: rel diff coeffs %.2e grads %.2e", lmaxes[li], it, ev, eg);
+            if (lmaxes[li] <= LMAX) worst_v = fmax(worst_v, ev);
+            else worst_v30 = fmax(worst_v30, ev);
+            worst_g = fmax(worst_g, eg);
+            shl_lights_destroy(l);
+        }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(inside_pts == 12);
+    harness_note("160 points: max rel diff coeffs lmax 0/1/6 %.1e (tol 1e-13), lmax 30 %.1e (tol 1e-12); "
+                 "grads lmax 0..30 %.1e (tol 1e-12)", worst_v, worst_v30, worst_g);
+}
+
+/* Polygons and spheres in one set: the sum of rgb x shl_polygon_grad and rgb x shl_sphere_grad. */
+SHL_TEST(lights_mixed_set_sum_of_parts)
+{
+    enum { NSPH = 3 };
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 31);
+    const double sc[NSPH][3] = {{0.5, -0.2, 0.3}, {-2.0, 1.0, 2.5}, {30.0, -40.0, 10.0}};
+    const double sr[NSPH] = {0.6, 0.8, 1e-3}, srgb[NSPH][3] = {{1.0, 2.0, 0.5}, {-0.3, 0.4, 1.1}, {1e4, 2e4, 3e4}};
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    for (int i = 0; i < NLIGHTS; ++i) { /* interleaved */
+        CHECK(shl_lights_add_polygon(l, s.verts[i], s.n[i], s.rgb[i], 1) == SHL_OK);
+        if (i < NSPH) CHECK(shl_lights_add_sphere(l, sc[i], sr[i], srgb[i]) == SHL_OK);
+    }
+    CHECK(shl_lights_count(l) == NLIGHTS + NSPH);
+    rng_t r = {9};
+    double worst_v = 0.0, worst_g = 0.0;
+    int inside_pts = 0;
+    for (int it = 0; it < 30; ++it) {
+        double x[3], rgb[3 * NC], grad[9 * NC], want[3 * NC] = {0}, want_g[9 * NC] = {0};
+        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0);
+        if (it == 0) x[0] = 0.5, x[1] = -0.2, x[2] = 0.3; /* centre of sphere 0 */
+        const double dx[3] = {x[0] - sc[0][0], x[1] - sc[0][1], x[2] - sc[0][2]};
+        inside_pts += sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]) <= sr[0];
+        for (int i = 0; i < NLIGHTS; ++i) {
+            double c[NC], g[3 * NC];
+            CHECK(shl_polygon_grad(ctx, x, s.verts[i], s.n[i], c, g) == SHL_OK);
+            for (int ch = 0; ch < 3; ++ch)
+                for (int k = 0; k < NC; ++k) {
+                    want[ch * NC + k] += s.rgb[i][ch] * c[k];
+                    for (int a = 0; a < 3; ++a) want_g[(ch * 3 + a) * NC + k] += s.rgb[i][ch] * g[a * NC + k];
+                }
+        }
+        for (int i = 0; i < NSPH; ++i) add_sphere_ref(ctx, NC, x, sc[i], sr[i], srgb[i], want, want_g);
+        CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+        const double sv = max_abs(want, 3 * NC), sg = max_abs(want_g, 9 * NC);
+        for (int k = 0; k < 3 * NC; ++k) worst_v = fmax(worst_v, fabs(rgb[k] - want[k]) / sv);
+        for (int k = 0; k < 9 * NC; ++k) worst_g = fmax(worst_g, fabs(grad[k] - want_g[k]) / sg);
+    }
+    CHECK(inside_pts >= 2);
+    CHECK(worst_v <= 1e-13 && worst_g <= 1e-12);
+    harness_note("%d polygons + %d spheres, 30 points (%d inside a sphere): max rel diff coeffs %.1e, grads %.1e",
+                 NLIGHTS, NSPH, inside_pts, worst_v, worst_g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* The set's sphere gradient against central differences of its own coefficients (h = 1e-5). */
+SHL_TEST(lights_sphere_grad_vs_finite_differences)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    const double c1[3] = {0.3, 0.2, 2.0}, c2[3] = {-1.5, 0.5, -0.5}, rgb1[3] = {1, 2, 3}, rgb2[3] = {0.5, -1, 0.25};
+    CHECK(shl_lights_add_sphere(l, c1, 0.9, rgb1) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l, c2, 0.3, rgb2) == SHL_OK);
+    rng_t r = {17};
+    double worst = 0.0;
+    for (int it = 0; it < 10; ++it) {
+        double x[3], rgb[3 * NC], grad[9 * NC], p[3 * NC], m[3 * NC], fd[9 * NC];
+        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -0.8, 0.8);
+        CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
+        const double h = 1e-5;
+        for (int a = 0; a < 3; ++a) {
+            double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
+            xp[a] += h;
+            xm[a] -= h;
+            CHECK(shl_lights_eval(ctx, l, xp, p, NULL) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, l, xm, m, NULL) == SHL_OK);
+            for (int ch = 0; ch < 3; ++ch)
+                for (int k = 0; k < NC; ++k) fd[(ch * 3 + a) * NC + k] = (p[ch * NC + k] - m[ch * NC + k]) / (2 * h);
+        }
+        const double sc = max_abs(fd, 9 * NC);
+        for (int k = 0; k < 9 * NC; ++k) worst = fmax(worst, fabs(grad[k] - fd[k]) / sc);
+    }
+    CHECK(worst <= 1e-7);
+    harness_note("two spheres: max |grad - FD| / max|FD| %.1e (tol 1e-7)", worst);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+SHL_TEST(lights_sphere_bad_input)
+{
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    const double c[3] = {0, 0, 2}, rgb[3] = {1, 1, 1}, cnan[3] = {0, NAN, 2}, cinf[3] = {-INFINITY, 0, 2};
+    const double rgbnan[3] = {NAN, 1, 1}, rgbinf[3] = {1, 1, INFINITY};
+    CHECK(shl_lights_add_sphere(NULL, c, 1.0, rgb) == SHL_ENULL);
+    CHECK(shl_lights_add_sphere(l, NULL, 1.0, rgb) == SHL_ENULL);
+    CHECK(shl_lights_add_sphere(l, c, 1.0, NULL) == SHL_ENULL);
+    CHECK(shl_lights_add_sphere(l, cnan, 1.0, rgb) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, cinf, 1.0, rgb) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, 1.0, rgbnan) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, 1.0, rgbinf) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, NAN, rgb) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, INFINITY, rgb) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, -INFINITY, rgb) == SHL_ENONFINITE);
+    CHECK(shl_lights_add_sphere(l, c, 0.0, rgb) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_sphere(l, c, -0.0, rgb) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_sphere(l, c, -1.0, rgb) == SHL_EDOMAIN);
+    CHECK(shl_lights_count(l) == 0);
+    /* the same inputs shl_sphere rejects, with the same codes */
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(1, &ctx) == SHL_OK);
+    const double x[3] = {0, 0, 0};
+    double co[4];
+    CHECK(shl_sphere(ctx, x, cnan, 1.0, co) == SHL_ENONFINITE);
+    CHECK(shl_sphere(ctx, x, c, NAN, co) == SHL_ENONFINITE);
+    CHECK(shl_sphere(ctx, x, c, 0.0, co) == SHL_EDOMAIN);
+    CHECK(shl_sphere(ctx, x, c, -1.0, co) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_sphere(l, c, DBL_MIN / 4, rgb) == SHL_OK); /* subnormal radius: valid, sees ~nothing */
+    CHECK(shl_lights_add_sphere(l, c, 1.0, rgb) == SHL_OK);
+    CHECK(shl_lights_count(l) == 2);
+    double a[3 * 4];
+    CHECK(shl_lights_eval(ctx, l, x, a, NULL) == SHL_OK);
+    CHECK(shl_sphere(ctx, x, c, 1.0, co) == SHL_OK);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int k = 0; k < 4; ++k) CHECK_NEAR(a[ch * 4 + k], co[k], 1e-15);
+    shl_ctx_destroy(ctx);
+    shl_lights_destroy(l);
 }
