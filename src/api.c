@@ -41,6 +41,7 @@ int shl_ctx_create(int lmax, shl_ctx **out)
     if (!ctx) return SHL_ENOMEM;
     ctx->lmax = lmax;
     ctx->nc = SHL_NCOEFFS(lmax);
+    ctx->isa = shl__isa_select();
     *out = ctx;
     return SHL_OK;
 }

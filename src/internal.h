@@ -12,10 +12,16 @@
 #define M_SQRT2 1.41421356237309504880
 #endif
 
+typedef struct shl__isa shl__isa; /* batch kernels of one instruction set (simd/batch.h) */
+
 struct shl_ctx {
     int lmax;
     int nc; /* SHL_NCOEFFS(lmax) */
+    const shl__isa *isa; /* chosen once at creation (dispatch.c) */
 };
+
+/* The batch kernels for this CPU, or those forced by SHLIGHT_ISA (dispatch.c). */
+const shl__isa *shl__isa_select(void);
 
 /* Allocation hooks: every library allocation goes through these so that
  * tests can inject failures (tests/alloc_hook.c); not part of the public API. */

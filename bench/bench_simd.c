@@ -1,0 +1,252 @@
+/* Batched SIMD kernel benchmark (shl_polygon_batch_f), one core, triangle light:
+ *  - speed vs the scalar double single-point loop (shl_polygon, shl_polygon_grad), lmax 2..14,
+ *  - the same kernel compiled scalar (SHLIGHT_ISA=scalar) and the scalar float path, for scale,
+ *  - fraction of peak: this core's FMA throughput measured in the same run
+ *    (independent FMA chains in registers) against the kernel's counted flops.
+ * All ratios come from one run.  CSV: $BUILD/bench/bench_simd.csv (argv[1] overrides). */
+#include "shlight.h"
+#include "util.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#elif defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
+/* 256 points per batch call: the outputs of a call (up to 0.7 MB: lmax 14 with
+ * gradients) stay in this core's L2, as the single-point loops' do. */
+enum { NPTS = 256, NV = 3 };
+
+typedef struct {
+    const shl_ctx *ctx;
+    float vf[3 * NV], pf[3 * NPTS], *out, *grad;
+    double vd[3 * NV], pd[3 * NPTS], *outd, *gradd;
+    long inner; /* evaluations per timed call */
+} job;
+
+static void run_batch(void *p)
+{
+    job *j = p;
+    for (long done = 0; done < j->inner; done += NPTS)
+        shl_polygon_batch_f(j->ctx, j->vf, NV, NPTS, j->pf, j->out, j->grad);
+    bench_sink += j->out[1];
+}
+
+static void run_scalar_double(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        const double *x = j->pd + 3 * (i % NPTS);
+        if (j->gradd) shl_polygon_grad(j->ctx, x, j->vd, NV, j->outd, j->gradd);
+        else shl_polygon(j->ctx, x, j->vd, NV, j->outd);
+    }
+    bench_sink += j->outd[1];
+}
+
+static void run_scalar_float(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        const float *x = j->pf + 3 * (i % NPTS);
+        if (j->grad) shl_polygon_grad_f(j->ctx, x, j->vf, NV, j->out, j->grad);
+        else shl_polygon_f(j->ctx, x, j->vf, NV, j->out);
+    }
+    bench_sink += j->out[1];
+}
+
+/* Calibrate j->inner (a multiple of granule) for calls of about 10 ms. */
+static void calibrate(void (*fn)(void *), job *j, long granule)
+{
+    j->inner = granule;
+    fn(j); /* warm-up */
+    const double t0 = bench_now();
+    fn(j);
+    j->inner = granule * (long)fmax(1.0, 0.01 / fmax(bench_now() - t0, 1e-7));
+}
+
+/* Seconds per evaluation of one timed call. */
+static double once(void (*fn)(void *), job *j)
+{
+    const double t0 = bench_now();
+    fn(j);
+    return (bench_now() - t0) / (double)j->inner;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* Floating-point operations of one evaluation, counted from simd/poly_batch.h as
+ * executed (add, sub, mul, div, sqrt: 1; FMA: 2; min, max, abs, sign, select: 0)
+ * for a convex polygon of n vertices.  Geometry: 13 per vertex, 107 per edge
+ * (+42 with gradients), 43 per fan triangle.  Per lobe pair (lobe 0 alone):
+ * shared dot products 5 per vertex and 15 (+5) per edge; per lobe and edge 7 + 2
+ * sums (+6) and per band step 20 + 1 sum (+9), a sum being a multiply on the
+ * first edge and an FMA on the others; the S_l recurrence; with gradients the
+ * sums over edges of mu_e I_l,e, 3 (2n - 1) per band used; the scaling and
+ * pairing.  Reconstruction: 2((l+1)^2 + l^2) per band and quantity. */
+static double kernel_flops(int lmax, int n, int grad)
+{
+    const int nq = grad ? 4 : 1, lend = grad ? lmax : lmax - 1, steps = lend >= 2 ? lend - 1 : 0;
+    double f = 13.0 * n + (107.0 + (grad ? 42 : 0)) * n + 43.0 * (n - 2) + 2;
+    for (int k = 0; k <= lmax; ++k) {
+        const int nl = k ? 2 : 1;
+        f += 5.0 * n + (15.0 + (grad ? 5 : 0)) * n;
+        for (int e = 0; e < n; ++e) {
+            const double sum = e == 0 ? 1.0 : 2.0;
+            f += nl * (7 + 2 * sum + steps * (20 + sum) + (grad ? 6 + 9.0 * steps : 0));
+        }
+        if (grad) f += nl * 3.0 * (lmax - k + 1) * (2.0 * n - 1);
+        f += nl * ((lmax >= 1 ? 1 : 0) + 3.0 * (lmax >= 2 ? lmax - 1 : 0));
+        f += nq * (lmax - k + 1) * (k ? 5.0 : 2.0);
+    }
+    for (int l = 0; l <= lmax; ++l) f += nq * 2.0 * ((l + 1) * (l + 1) + l * l);
+    return f;
+}
+
+/* ---- this core's peak: 10 independent FMA chains in registers (more than
+ * latency x throughput = 4 x 2 on current cores), no memory traffic ---- */
+#define FMA_CHAINS 10
+#define CHAINS(op) op(a0) op(a1) op(a2) op(a3) op(a4) op(a5) op(a6) op(a7) op(a8) op(a9)
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx2,fma"))) static void fma_peak(void *p)
+{
+    const job *j = p;
+    const __m256 m = _mm256_set1_ps(0.9999999f), c = _mm256_set1_ps(1e-7f);
+    const float s = (float)(j->inner & 7); /* not a compile-time constant */
+#define INIT(a) __m256 a = _mm256_set1_ps(s + (float)(#a)[1]); /* distinct starts */
+#define STEP(a) a = _mm256_fmadd_ps(a, m, c);
+#define SUM(a) t = _mm256_add_ps(t, a);
+    CHAINS(INIT)
+    for (long i = 0; i < j->inner; ++i) {
+        CHAINS(STEP)
+    }
+    __m256 t = _mm256_setzero_ps();
+    CHAINS(SUM)
+    float out[8];
+    _mm256_storeu_ps(out, t);
+    bench_sink += out[0];
+}
+#define PEAK_ISA "avx2"
+#define PEAK_FLOPS_PER_ITER (FMA_CHAINS * 8 * 2)
+#elif defined(__aarch64__)
+static void fma_peak(void *p)
+{
+    const job *j = p;
+    const float32x4_t m = vdupq_n_f32(0.9999999f), c = vdupq_n_f32(1e-7f);
+    const float s = (float)(j->inner & 7); /* not a compile-time constant */
+#define INIT(a) float32x4_t a = vdupq_n_f32(s + (float)(#a)[1]); /* distinct starts */
+#define STEP(a) a = vfmaq_f32(c, a, m);
+#define SUM(a) t = vaddq_f32(t, a);
+    CHAINS(INIT)
+    for (long i = 0; i < j->inner; ++i) {
+        CHAINS(STEP)
+    }
+    float32x4_t t = vdupq_n_f32(0.0f);
+    CHAINS(SUM)
+    bench_sink += vgetq_lane_f32(t, 0);
+}
+#define PEAK_ISA "neon"
+#define PEAK_FLOPS_PER_ITER (FMA_CHAINS * 4 * 2)
+#endif
+
+int main(int argc, char **argv)
+{
+    const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_simd.csv";
+    FILE *csv = fopen(csv_path, "w");
+    static job j;
+    static float out[NPTS * SHL_NCOEFFS(14)], grad[3 * NPTS * SHL_NCOEFFS(14)];
+    static double outd[SHL_NCOEFFS(14)], gradd[3 * SHL_NCOEFFS(14)];
+    shl_ctx *probe;
+    shl_ctx_create(0, &probe);
+    const char *isa = shl_ctx_isa(probe);
+    bench_print_machine(stdout);
+    printf("library: %s\nbatch ISA chosen: %s\n", shl_build_info(), isa);
+
+    for (int i = 0; i < NV; ++i) { /* triangle of radius 1 in the plane z = 2, points in [-1, 1]^3 */
+        j.vd[3 * i] = cos(2 * M_PI * i / NV);
+        j.vd[3 * i + 1] = sin(2 * M_PI * i / NV);
+        j.vd[3 * i + 2] = 2.0;
+    }
+    srand(1);
+    for (int k = 0; k < 3 * NPTS; ++k) j.pd[k] = 2.0 * rand() / RAND_MAX - 1.0;
+    for (int k = 0; k < 3 * NV; ++k) j.vf[k] = (float)j.vd[k];
+    for (int k = 0; k < 3 * NPTS; ++k) j.pf[k] = (float)j.pd[k];
+    j.out = out;
+    j.outd = outd;
+
+    job jp = j; /* the peak microbenchmark: 2^16 iterations of FMA_CHAINS FMAs per call */
+    jp.inner = 1L << 16;
+#ifdef PEAK_ISA
+    printf("peak: %d independent %s FMA chains in registers, measured in every round\n", FMA_CHAINS, PEAK_ISA);
+#endif
+    if (csv) fprintf(csv, "grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,flops,gflops,peak_gflops,peak_fraction\n");
+
+    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+        printf("\n## %s, triangle light, one core (%d points per batch call; time per point)\n\n",
+               with_grad ? "Coefficients and gradients (shl_polygon_grad)" : "Coefficients (shl_polygon)", NPTS);
+        printf("| lmax | scalar double ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | scalar float ns | flops/eval "
+               "| GFLOP/s | peak GFLOP/s | of peak |\n", isa);
+        printf("|---|---|---|---|---|---|---|---|---|---|\n");
+        for (int lmax = 2; lmax <= 14; lmax += 2) {
+            shl_ctx *ctx, *ctx_scalar;
+            shl_ctx_create(lmax, &ctx);
+            setenv("SHLIGHT_ISA", "scalar", 1);
+            shl_ctx_create(lmax, &ctx_scalar);
+            unsetenv("SHLIGHT_ISA");
+            job jb = j, jd = j, js = j, jf = j;
+            jb.ctx = jd.ctx = jf.ctx = ctx;
+            js.ctx = ctx_scalar;
+            jb.grad = js.grad = jf.grad = with_grad ? grad : NULL;
+            jd.gradd = with_grad ? gradd : NULL;
+            calibrate(run_batch, &jb, NPTS);
+            calibrate(run_batch, &js, NPTS);
+            calibrate(run_scalar_double, &jd, 64);
+            calibrate(run_scalar_float, &jf, 64);
+            /* ROUNDS rounds, each timing every variant once (and the peak), so that
+             * the ratios compare calls made under the same load */
+            enum { ROUNDS = 15 };
+            double tb[ROUNDS], td[ROUNDS], ts[ROUNDS], tf[ROUNDS], speed[ROUNDS], rate[ROUNDS], pk[ROUNDS], frac[ROUNDS];
+            const double flops = kernel_flops(lmax, NV, with_grad);
+            for (int r = 0; r < ROUNDS; ++r) {
+                tb[r] = once(run_batch, &jb);
+                td[r] = once(run_scalar_double, &jd);
+                ts[r] = once(run_batch, &js);
+                tf[r] = once(run_scalar_float, &jf);
+                speed[r] = td[r] / tb[r];
+                rate[r] = flops / tb[r];
+                pk[r] = 0.0;
+#ifdef PEAK_ISA
+                pk[r] = (double)PEAK_FLOPS_PER_ITER / once(fma_peak, &jp);
+#endif
+                frac[r] = pk[r] > 0 ? rate[r] / pk[r] : 0.0;
+            }
+            const double mb = median(tb, ROUNDS), md = median(td, ROUNDS), ms = median(ts, ROUNDS), mf = median(tf, ROUNDS);
+            const double msp = median(speed, ROUNDS), mr = median(rate, ROUNDS), mp = median(pk, ROUNDS), mfr = median(frac, ROUNDS);
+            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f | %.0f | %.1f | %.1f | **%.0f%%** |\n", lmax, md * 1e9,
+                   mb * 1e9, msp, ms * 1e9, mf * 1e9, flops, mr * 1e-9, mp * 1e-9, 100.0 * mfr);
+            if (csv)
+                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,%.0f,%.2f,%.2f,%.3f\n", with_grad, lmax, isa, mb * 1e9,
+                        md * 1e9, msp, ms * 1e9, mf * 1e9, flops, mr * 1e-9, mp * 1e-9, mfr);
+            shl_ctx_destroy(ctx);
+            shl_ctx_destroy(ctx_scalar);
+        }
+    }
+    printf("\nMedians over 15 rounds; in each round every variant is timed once (calls of ~10 ms) and\n"
+           "the speed-up and the fraction of peak are ratios within the round.\n"
+           "flops/eval: counted from simd/poly_batch.h (kernel_flops in this file).\n");
+    if (csv) fclose(csv);
+    shl_ctx_destroy(probe);
+    printf("(checksum %g)\n", (double)bench_sink);
+    return 0;
+}

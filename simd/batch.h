@@ -1,0 +1,54 @@
+/* Batched polygon kernels: the polygon prepared once per call (src/batch.c),
+ * the per-ISA kernel table (src/dispatch.c), shared with the kernels compiled
+ * once per ISA from simd/poly_batch.h. */
+#ifndef SHL_SIMD_BATCH_H
+#define SHL_SIMD_BATCH_H
+
+#include "internal.h"
+#include "zh_tables.h"
+
+/* A polygon prepared for many shading points, in scaled units: every
+ * coordinate (vertices and points) is multiplied by inv_scale, a power of two
+ * that brings the polygon's extent near 1, so the float geometry neither
+ * underflows nor overflows (exact; coefficients are scale invariant). */
+typedef struct {
+    int n;                        /* vertices after dropping repeated ones; 0: sees nothing */
+    double inv_scale;             /* 2^-k */
+    double vd[SHL_MAX_VERTS][3];  /* kept vertices (scaled, exact) */
+    double normal[3], len2;       /* Newell normal of vd (relative to vd[0]) and its squared length */
+    float v[SHL_MAX_VERTS][3];    /* kept vertices as float */
+    float edge[SHL_MAX_VERTS][3]; /* v_{e+1} - v_e from the doubles: accurate for nearby vertices */
+    /* fan triangle i = (v_0, v_i, v_i+1), 1 <= i <= n-2: its triple product seen
+     * from x is (v_0 - x) . c_i = h * fan[i], with h = normal . (v_0 - x) and
+     * fan[i] = normal . c_i / len2 (c_i parallel to normal for a planar polygon) */
+    float fan[SHL_MAX_VERTS];
+    float unit_normal[3], inv_len; /* normal / |normal|, 1 / |normal| */
+    double proxy[3];              /* an off-plane point, evaluated in masked lanes */
+} shl__batch_poly;
+
+/* Kernel arguments: points pts[3p..3p+2] (unscaled floats) for 0 <= p < npts;
+ * coeffs + p*nc and, if grad != NULL, grad + 3*nc*p as for shl_polygon_grad_f.
+ * work: shl__isa.work_bytes(lmax, grad != NULL) bytes, any alignment. */
+typedef void (*shl__poly_batch_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts,
+                                   float *coeffs, float *grad, void *work);
+
+struct shl__isa {
+    const char *name;  /* "scalar", "avx2", "neon" */
+    int vlen;          /* float lanes */
+    size_t (*work_bytes)(int lmax, int with_grad);
+    shl__poly_batch_fn poly_batch;
+};
+
+extern const shl__isa shl__isa_scalar;
+extern const shl__isa shl__isa_avx2;
+extern const shl__isa shl__isa_neon;
+
+/* Float copies of the lobe table (zh_tables.h), filled once by shl__isa_select(). */
+extern float shl__zh_dir_f[SHL__ZH_NDIR][3];
+extern float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE];
+extern float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE];
+
+/* The table named name if compiled in and supported by this CPU, else NULL (dispatch.c). */
+const shl__isa *shl__isa_find(const char *name);
+
+#endif

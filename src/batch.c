@@ -1,0 +1,92 @@
+/* Batched evaluation entry points: argument checks, the polygon prepared once
+ * in double (scaled, repeated vertices dropped, plane and fan data), then the
+ * context's SIMD kernel (simd/poly_batch.h) over all points. */
+#include "../simd/batch.h"
+#include <math.h>
+#include <string.h>
+
+static void cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Repeated vertices dropped as in shl__poly_geom_init (polygon.c); P->n = 0
+ * when fewer than 3 remain or the polygon has zero area. */
+static void prepare(const float *verts, int n, shl__batch_poly *P)
+{
+    float kept[3 * SHL_MAX_VERTS];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(float) * 3) == 0) continue;
+        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(float) * 3);
+    }
+    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(float) * 3) == 0) --m;
+    P->n = 0;
+    if (m < 3) return;
+    double ext = 0.0; /* extent about v_0, > 0 since the vertices differ */
+    for (int i = 1; i < m; ++i)
+        for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs((double)kept[3 * i + k] - kept[k]));
+    P->inv_scale = ldexp(1.0, -ilogb(ext)); /* extent in [1, 2) after scaling */
+    for (int i = 0; i < m; ++i)
+        for (int k = 0; k < 3; ++k) P->vd[i][k] = kept[3 * i + k] * P->inv_scale;
+    double normal[3] = {0.0, 0.0, 0.0}, c[SHL_MAX_VERTS][3]; /* Newell, relative to v_0 */
+    for (int i = 1; i + 1 < m; ++i) {
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = P->vd[i][k] - P->vd[0][k];
+            e2[k] = P->vd[i + 1][k] - P->vd[0][k];
+        }
+        cross3(e1, e2, c[i]);
+        for (int k = 0; k < 3; ++k) normal[k] += c[i][k];
+    }
+    const double len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
+    if (!(len2 > 0.0)) return; /* zero area: sees nothing */
+    memcpy(P->normal, normal, sizeof normal);
+    P->len2 = len2;
+    double centroid[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < m; ++i) {
+        const int f = i + 1 == m ? 0 : i + 1;
+        for (int k = 0; k < 3; ++k) {
+            P->v[i][k] = (float)P->vd[i][k];
+            P->edge[i][k] = (float)(P->vd[f][k] - P->vd[i][k]);
+            centroid[k] += P->vd[i][k] / m;
+        }
+        P->fan[i] = 0.0f;
+    }
+    for (int i = 1; i + 1 < m; ++i)
+        P->fan[i] = (float)((normal[0] * c[i][0] + normal[1] * c[i][1] + normal[2] * c[i][2]) / len2);
+    const double inv_len = 1.0 / sqrt(len2);
+    for (int k = 0; k < 3; ++k) {
+        P->unit_normal[k] = (float)(normal[k] * inv_len);
+        P->proxy[k] = centroid[k] + normal[k] * inv_len;
+    }
+    P->inv_len = (float)inv_len;
+    P->n = m;
+}
+
+int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
+                        float *coeffs, float *grad)
+{
+    if (!ctx || !verts || (npts > 0 && (!pts || !coeffs))) return SHL_ENULL;
+    if (n < 3 || n > SHL_MAX_VERTS) return SHL_ENVERTS;
+    if (npts < 0) return SHL_EDOMAIN;
+    if (shl__check_finite_f(verts, 3 * n)) return SHL_ENONFINITE;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (npts == 0) return SHL_OK;
+    shl__batch_poly P;
+    prepare(verts, n, &P);
+    const size_t nc = (size_t)ctx->nc;
+    if (P.n == 0) {
+        memset(coeffs, 0, sizeof(float) * nc * (size_t)npts);
+        if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
+        return SHL_OK;
+    }
+    void *work = shl__malloc(ctx->isa->work_bytes(ctx->lmax, grad != NULL));
+    if (!work) return SHL_ENOMEM;
+    ctx->isa->poly_batch(&P, ctx->lmax, npts, pts, coeffs, grad, work);
+    shl__free(work);
+    return SHL_OK;
+}

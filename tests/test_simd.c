@@ -1,0 +1,438 @@
+/* Batched SIMD kernels (shl_polygon_batch_f) against the scalar double
+ * reference (shl_polygon, shl_polygon_grad on the float-rounded input) and,
+ * lane by lane, against the scalar float path (shl_polygon_f,
+ * shl_polygon_grad_f), for every ISA this machine runs (contexts created with
+ * SHLIGHT_ISA set).  Errors: coefficients relative to |L00| of the reference,
+ * gradients relative to the largest reference gradient of the point. */
+#include "geom.h"
+#include "../simd/batch.h"
+#include "harness.h"
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+
+enum { LMAX = 14, NC = SHL_NCOEFFS(LMAX), NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX), MAXPTS = 40 };
+static const char *const isas[] = {"scalar", "avx2", "neon"};
+enum { NISA = sizeof isas / sizeof isas[0] };
+
+/* Context whose batch kernels are isa, or NULL when this machine cannot run it. */
+static shl_ctx *isa_ctx(const char *isa, int lmax)
+{
+    const char *old = getenv("SHLIGHT_ISA");
+    char saved[64] = "";
+    if (old) snprintf(saved, sizeof saved, "%s", old);
+    setenv("SHLIGHT_ISA", isa, 1);
+    shl_ctx *ctx = NULL;
+    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+    if (old) setenv("SHLIGHT_ISA", saved, 1);
+    else unsetenv("SHLIGHT_ISA");
+    if (ctx && strcmp(shl_ctx_isa(ctx), isa) != 0) {
+        shl_ctx_destroy(ctx);
+        return NULL;
+    }
+    return ctx;
+}
+
+/* A polygon (float) and points. */
+typedef struct {
+    const char *what;
+    int n, npts;
+    float v[3 * SHL_MAX_VERTS], p[3 * MAXPTS];
+} batch_case;
+
+/* Worst errors over points: relative to their tolerances, and raw (coefficients
+ * / |L00|, gradients / max|grad|), and raw for polygons subtending theta >= 0.5 rad. */
+typedef struct { double coef, grad, lane_coef, lane_grad, raw_coef, raw_grad, raw_coef_big, raw_grad_big; } errors;
+
+/* Float tolerances, 2-3 times the worst errors measured over 4000 random polygons
+ * and points (RESULTS-simd.md): coefficients 2e-5 |L00| plus the float
+ * cancellation of the boundary sums (O(theta) terms over the edges adding to
+ * O(theta^2), Wang 2018 Eq. 29), measured up to 1.7e-5 / theta for a polygon of
+ * angular size theta = sqrt(solid angle) (shl_polygon_f: 6.6e-6 / theta, its
+ * geometry is double); gradients 1e-4 max|grad| plus 5e-5 / theta (measured
+ * 2.3e-5 / theta).  Hard cases add the conditioning term 8 FLT_EPSILON * scale *
+ * max|grad| of 1-ulp moves of the inputs (scale: the largest coordinate), as
+ * test_polygon.c does in double. */
+static double coef_tol(double theta) { return 2e-5 + 4e-5 / theta; }
+static double grad_tol(double theta) { return 1e-4 + 5e-5 / theta; }
+
+/* Run one case on ctx: every point against the double reference and against the
+ * scalar float path (twice the tolerance: both carry float error), all outputs
+ * finite, exact zeros where nothing is seen, guards after the outputs intact,
+ * coefficients identical with and without gradients. */
+static errors run_case(const shl_ctx *ctx, const batch_case *bc, int hard)
+{
+    const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax), np = bc->npts;
+    static float c[MAXPTS * NCMAX + 1], g[3 * MAXPTS * NCMAX + 1], c2[MAXPTS * NCMAX + 1];
+    static float cf[NCMAX], gf[3 * NCMAX];
+    static double cr[NCMAX], gr[3 * NCMAX];
+    double vd[3 * SHL_MAX_VERTS], scale = 0.0;
+    errors e = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int i = 0; i < 3 * bc->n; ++i) scale = fmax(scale, fabs(vd[i] = bc->v[i]));
+    c[np * nc] = c2[np * nc] = g[3 * np * nc] = 7.0f;
+    CHECK(shl_polygon_batch_f(ctx, bc->v, bc->n, np, bc->p, c, g) == SHL_OK);
+    CHECK(shl_polygon_batch_f(ctx, bc->v, bc->n, np, bc->p, c2, NULL) == SHL_OK);
+    CHECK(c[np * nc] == 7.0f && c2[np * nc] == 7.0f && g[3 * np * nc] == 7.0f);
+    for (int p = 0; p < np; ++p) {
+        const double x[3] = {bc->p[3 * p], bc->p[3 * p + 1], bc->p[3 * p + 2]};
+        const float *cp = c + p * nc, *gp = g + 3 * p * nc;
+        double omega, gmax = 0, ec = 0, eg = 0, lc = 0, lg = 0;
+        int finite = 1;
+        CHECK(shl_polygon_grad(ctx, x, vd, bc->n, cr, gr) == SHL_OK);
+        CHECK(shl_polygon_grad_f(ctx, bc->p + 3 * p, bc->v, bc->n, cf, gf) == SHL_OK);
+        CHECK(shl_polygon_solid_angle(x, vd, bc->n, &omega) == SHL_OK);
+        for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(gr[k]));
+        for (int k = 0; k < nc; ++k) {
+            finite &= isfinite(cp[k]) && cp[k] == c2[p * nc + k];
+            ec = fmax(ec, fabs(cp[k] - cr[k]));
+            lc = fmax(lc, fabs(cp[k] - cf[k]));
+        }
+        for (int k = 0; k < 3 * nc; ++k) {
+            finite &= isfinite(gp[k]);
+            eg = fmax(eg, fabs(gp[k] - gr[k]));
+            lg = fmax(lg, fabs(gp[k] - gf[k]));
+        }
+        CHECK(finite);
+        if (omega == 0.0) { /* sees nothing: exact zeros, as the scalar paths */
+            for (int k = 0; k < nc; ++k) CHECK(cp[k] == 0.0f && cf[k] == 0.0f);
+            for (int k = 0; k < 3 * nc; ++k) CHECK(gp[k] == 0.0f);
+            continue;
+        }
+        const double l00 = fabs(cr[0]), theta = sqrt(omega);
+        const double cond = hard ? 8.0 * FLT_EPSILON * fmax(scale, fmax(fabs(x[0]), fmax(fabs(x[1]), fabs(x[2])))) * gmax / l00 : 0.0;
+        const double tc = coef_tol(theta) + cond, tg = grad_tol(theta);
+        ec /= l00, lc /= l00, eg /= gmax, lg /= gmax;
+        if (!(ec <= tc && eg <= tg && lc <= 2 * tc && lg <= 2 * tg))
+            harness_fail(__FILE__, __LINE__,
+                         "%s [%s, lmax %d] point %d (%a, %a, %a), theta %.2g: coeffs %.3g (tol %.2g), grad %.3g "
+                         "(tol %.2g), vs scalar float %.3g, %.3g",
+                         bc->what, shl_ctx_isa(ctx), lmax, p, x[0], x[1], x[2], theta, ec, tc, eg, tg, lc, lg);
+        e.raw_coef = fmax(e.raw_coef, ec);
+        e.raw_grad = fmax(e.raw_grad, eg);
+        if (theta >= 0.5) e.raw_coef_big = fmax(e.raw_coef_big, ec), e.raw_grad_big = fmax(e.raw_grad_big, eg);
+        e.coef = fmax(e.coef, ec / tc);
+        e.grad = fmax(e.grad, eg / tg);
+        e.lane_coef = fmax(e.lane_coef, lc / tc);
+        e.lane_grad = fmax(e.lane_grad, lg / tg);
+    }
+    return e;
+}
+
+static void errors_max(errors *a, errors b)
+{
+    a->coef = fmax(a->coef, b.coef);
+    a->grad = fmax(a->grad, b.grad);
+    a->lane_coef = fmax(a->lane_coef, b.lane_coef);
+    a->lane_grad = fmax(a->lane_grad, b.lane_grad);
+    a->raw_coef = fmax(a->raw_coef, b.raw_coef);
+    a->raw_grad = fmax(a->raw_grad, b.raw_grad);
+    a->raw_coef_big = fmax(a->raw_coef_big, b.raw_coef_big);
+    a->raw_grad_big = fmax(a->raw_grad_big, b.raw_grad_big);
+}
+
+/* Random polygon as in test_polygon.c (triangle, quad, concave hexagon) and
+ * npts points at distance 0.5..dmax from its centre, on both sides of its
+ * plane and at least 0.05 off it in direction cosine. */
+static void random_batch(rng_t *r, int kind, int npts, double dmax, batch_case *bc)
+{
+    double center[3], nrm[3], v[18];
+    for (int k = 0; k < 3; ++k) center[k] = rng_range(r, -1.0, 1.0);
+    rng_unit_vector(r, nrm);
+    bc->n = kind == 0 ? 3 : kind == 1 ? 4 : 6;
+    random_polygon(r, bc->n, kind == 2, center, nrm, rng_range(r, 0.3, 2.0), v);
+    for (int i = 0; i < 3 * bc->n; ++i) bc->v[i] = (float)v[i];
+    bc->npts = npts;
+    for (int p = 0; p < npts; ++p) {
+        double off[3];
+        rng_unit_vector(r, off);
+        const double dist = rng_range(r, 0.5, dmax), side = off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2];
+        if (fabs(side) < 0.05)
+            for (int k = 0; k < 3; ++k) off[k] += (side < 0 ? -0.1 : 0.1) * nrm[k];
+        for (int k = 0; k < 3; ++k) bc->p[3 * p + k] = (float)(center[k] + dist * off[k]);
+    }
+}
+
+#define NOTE_ERRORS(isa, e)                                                                                   \
+    harness_note("%s: coeffs %.1e |L00|, grad %.1e max|grad| (theta >= 0.5: %.1e, %.1e); worst error/tol %.2f, " \
+                 "%.2f (vs scalar float %.2f, %.2f)",                                                             \
+                 isa, (e).raw_coef, (e).raw_grad, (e).raw_coef_big, (e).raw_grad_big, (e).coef, (e).grad,         \
+                 (e).lane_coef / 2, (e).lane_grad / 2)
+
+SHL_TEST(simd_random_vs_double_reference)
+{
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], LMAX);
+        if (!ctx) continue;
+        rng_t r = {41};
+        errors worst = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (int it = 0; it < 30; ++it) {
+            batch_case bc = {"random", 0, 0, {0}, {0}};
+            random_batch(&r, it % 3, 19, it < 15 ? 4.0 : 100.0, &bc);
+            errors_max(&worst, run_case(ctx, &bc, 0));
+        }
+        NOTE_ERRORS(isas[i], worst);
+        shl_ctx_destroy(ctx);
+    }
+}
+
+SHL_TEST(simd_every_lmax)
+{
+    for (int i = 0; i < NISA; ++i) {
+        errors worst = {0, 0, 0, 0, 0, 0, 0, 0};
+        int ran = 0;
+        for (int lmax = 0; lmax <= SHL_LMAX_MAX; lmax += lmax < 16 ? 1 : 7) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmax);
+            if (!ctx) break;
+            ran = 1;
+            rng_t r = {(uint64_t)(100 + lmax)};
+            batch_case bc = {"lmax sweep", 0, 0, {0}, {0}};
+            random_batch(&r, lmax % 3, 11, 4.0, &bc);
+            errors_max(&worst, run_case(ctx, &bc, 0));
+            shl_ctx_destroy(ctx);
+        }
+        if (ran) NOTE_ERRORS(isas[i], worst);
+    }
+}
+
+/* ---- hard cases of test_polygon.c and test_polygon_grad.c, in float ---- */
+
+static void set_points(batch_case *bc, const double (*p)[3], int np)
+{
+    bc->npts = np;
+    for (int i = 0; i < np; ++i)
+        for (int k = 0; k < 3; ++k) bc->p[3 * i + k] = (float)p[i][k];
+}
+
+static void set_verts(batch_case *bc, const double *v, int n)
+{
+    bc->n = n;
+    for (int i = 0; i < 3 * n; ++i) bc->v[i] = (float)v[i];
+}
+
+static const double unit_square[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+
+/* Every hard case on ctx; returns the worst errors (relative to their tolerances). */
+static errors hard_cases(const shl_ctx *ctx)
+{
+    errors worst = {0, 0, 0, 0, 0, 0, 0, 0};
+    const double r2 = M_SQRT2;
+    batch_case bc = {"", 0, 0, {0}, {0}};
+    /* unit square: near the plane (inside, grazing, below), in the plane (zeros),
+     * on a vertex (zeros), 1e-6 from an edge, edge arc ~pi, both sides */
+    const double sq_pts[][3] = {{0.3, 0.6, 1e-7},     {1.7, 0.4, 1e-7},    {0.5, 0.5, -1e-7},      {0.5, 0.5, 0},
+                                {3, 0.5, 0},          {0.5, 0, 0},         {1, 1, 0},              {-2, -7, 0},
+                                {0, 0, 0},            {0.2, 0.3, 0.8},     {0.5, -1e-6 / r2, 1e-6 / r2},
+                                {0.5, -1e-7 / r2, 1e-7 / r2}, {0.4, 0.45, -2.5}, {0.3, 0.6, 1e-3}};
+    bc.what = "unit square";
+    set_verts(&bc, unit_square, 4);
+    set_points(&bc, sq_pts, sizeof sq_pts / sizeof sq_pts[0]);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* tiny (1e-4 at distance 10) and huge (1e4 at distance 1) */
+    const double s = 1e-4, h = 1e4;
+    const double tiny[12] = {0, 0, 10, s, 0, 10, s, s, 10, 0, s, 10};
+    const double huge[12] = {-h / 2, -h / 2, 1, h / 2, -h / 2, 1, h / 2, h / 2, 1, -h / 2, h / 2, 1};
+    const double tiny_pts[][3] = {{0.3, -0.2, 0.0}, {0, 0, 20}, {-1, 2, 9.5}};
+    const double huge_pts[][3] = {{0.3, 0.1, 0}, {0, 0, 2}, {100, -40, 0.5}, {3e3, 2e3, -1}};
+    bc.what = "tiny";
+    set_verts(&bc, tiny, 4);
+    set_points(&bc, tiny_pts, 3);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    bc.what = "huge";
+    set_verts(&bc, huge, 4);
+    set_points(&bc, huge_pts, 4);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* repeated and collinear vertices; degenerate polygons see nothing */
+    const double messy[24] = {0, 0, 0, 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0, 1, 0, 0, 0, 0};
+    const double point[9] = {1, 2, 3, 1, 2, 3, 1, 2, 3}, segment[12] = {0, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1};
+    const double messy_pts[][3] = {{0.2, 0.3, 0.8}, {0.5, 0.5, -0.3}, {2, 2, 2}};
+    bc.what = "repeated+collinear";
+    set_verts(&bc, messy, 8);
+    set_points(&bc, messy_pts, 3);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    bc.what = "single point";
+    set_verts(&bc, point, 3);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    bc.what = "segment";
+    set_verts(&bc, segment, 4);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* concave star */
+    const double star[18] = {1, 0, 2, 0.2, 0.3, 2, 0, 1, 2, -0.3, 0.1, 2, -1, -1, 2, 0.1, -0.2, 2};
+    const double star_pts[][3] = {{0.1, 0.2, 0.5}, {0, 0, 3}, {0.5, 0.5, 2.01}, {-0.2, 0.1, 1.9}};
+    bc.what = "concave star";
+    set_verts(&bc, star, 6);
+    set_points(&bc, star_pts, 4);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* an edge of length 1e-6 */
+    const double short_edge[12] = {0, 0, 0, 1, 0, 0, 1, 1e-6, 0, 0, 1, 0};
+    const double short_pts[][3] = {{0.3, 0.4, 0.7}, {1.0, 0.0, 0.01}, {2, 0.5, -1}};
+    bc.what = "edge length 1e-6";
+    set_verts(&bc, short_edge, 4);
+    set_points(&bc, short_pts, 3);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* the largest polygon: SHL_MAX_VERTS vertices on a circle */
+    double circle[3 * SHL_MAX_VERTS];
+    for (int i = 0; i < SHL_MAX_VERTS; ++i) {
+        circle[3 * i] = cos(2 * M_PI * i / SHL_MAX_VERTS);
+        circle[3 * i + 1] = sin(2 * M_PI * i / SHL_MAX_VERTS);
+        circle[3 * i + 2] = 1.0;
+    }
+    const double circle_pts[][3] = {{0, 0, 0}, {0.5, 0.2, 1.5}, {2, 0, 1}};
+    bc.what = "64-gon";
+    set_verts(&bc, circle, SHL_MAX_VERTS);
+    set_points(&bc, circle_pts, 3);
+    errors_max(&worst, run_case(ctx, &bc, 1));
+    /* lobe on an edge's plane (c_e = 0, Wang 2018 Eq. 20) and on an edge plane's
+     * normal (A = 0 in Wu 2020 Eq. 23), for lobes of the table */
+    const int lmax = shl_ctx_lmax(ctx), lobes[4] = {0, 1, 3, 2 * lmax};
+    const double origin[][3] = {{0, 0, 0}, {0.05, -0.02, 0.01}};
+    for (int i = 0; i < 4; ++i) {
+        const double *d = shl__zh_dir[lobes[i]];
+        double u[3], w[3], v[9], vn[9];
+        plane_basis(d, u, w);
+        for (int k = 0; k < 3; ++k) {
+            v[k] = 2.0 * (d[k] + 0.3 * u[k]);
+            v[3 + k] = 1.5 * (d[k] - 0.4 * u[k]);
+            v[6 + k] = 1.8 * (d[k] + 0.5 * w[k]);
+            vn[k] = 1.3 * u[k];
+            vn[3 + k] = 0.9 * (0.6 * u[k] + 0.8 * w[k]);
+            vn[6 + k] = 1.1 * (0.3 * u[k] + 0.3 * w[k] + 0.9 * d[k]);
+        }
+        bc.what = "lobe on edge plane";
+        set_verts(&bc, v, 3);
+        set_points(&bc, origin, 2);
+        errors_max(&worst, run_case(ctx, &bc, 1));
+        bc.what = "lobe on edge-plane normal";
+        set_verts(&bc, vn, 3);
+        errors_max(&worst, run_case(ctx, &bc, 1));
+    }
+    return worst;
+}
+
+SHL_TEST(simd_hard_cases)
+{
+    for (int i = 0; i < NISA; ++i) {
+        const int lmaxes[2] = {LMAX, SHL_LMAX_MAX};
+        for (int j = 0; j < 2; ++j) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmaxes[j]);
+            if (!ctx) continue;
+            const errors e = hard_cases(ctx);
+            harness_note("%s lmax %d: worst error/tol coeffs %.2f, grad %.2f (vs scalar float %.2f, %.2f)", isas[i],
+                         lmaxes[j], e.coef, e.grad, e.lane_coef / 2, e.lane_grad / 2);
+            shl_ctx_destroy(ctx);
+        }
+    }
+}
+
+/* Point counts 1..17 around the vector widths: the first npts results equal, bit
+ * for bit, those of one batch of 17 and of the same points at other lane
+ * positions; nothing is written outside the outputs. */
+SHL_TEST(simd_tails_and_lane_independence)
+{
+    enum { NP = 17, LM = 5, NCL = SHL_NCOEFFS(LM) };
+    rng_t r = {77};
+    batch_case bc = {"tails", 0, 0, {0}, {0}};
+    random_batch(&r, 1, NP + 1, 3.0, &bc);
+    memcpy(bc.p + 3 * 5, bc.v + 3, sizeof(float) * 3); /* point 5 on vertex 1: zeros */
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], LM);
+        if (!ctx) continue;
+        static float full_c[NP * NCL], full_g[3 * NP * NCL], c[NP * NCL + 2], g[3 * NP * NCL + 2];
+        CHECK(shl_polygon_batch_f(ctx, bc.v, bc.n, NP, bc.p, full_c, full_g) == SHL_OK);
+        for (int np = 1; np <= NP; ++np)
+            for (int shift = 0; shift <= 1 && shift + np <= NP; ++shift) {
+                for (int k = 0; k < np * NCL + 2; ++k) c[k] = 7.0f;
+                for (int k = 0; k < 3 * np * NCL + 2; ++k) g[k] = 7.0f;
+                CHECK(shl_polygon_batch_f(ctx, bc.v, bc.n, np, bc.p + 3 * shift, c + 1, g + 1) == SHL_OK);
+                CHECK(c[0] == 7.0f && c[np * NCL + 1] == 7.0f && g[0] == 7.0f && g[3 * np * NCL + 1] == 7.0f);
+                CHECK(memcmp(c + 1, full_c + shift * NCL, sizeof(float) * np * NCL) == 0);
+                CHECK(memcmp(g + 1, full_g + 3 * shift * NCL, sizeof(float) * 3 * np * NCL) == 0);
+            }
+        for (int k = 0; k < NCL; ++k) CHECK(full_c[5 * NCL + k] == 0.0f);
+        shl_ctx_destroy(ctx);
+    }
+}
+
+/* Either winding, and every point seeing its own side: each lane applies its sign. */
+SHL_TEST(simd_winding_per_lane)
+{
+    rng_t r = {91};
+    batch_case bc = {"winding", 0, 0, {0}, {0}}, rev;
+    random_batch(&r, 2, 16, 3.0, &bc);
+    rev = bc;
+    for (int i = 0; i < bc.n; ++i) memcpy(rev.v + 3 * i, bc.v + 3 * (bc.n - 1 - i), sizeof(float) * 3);
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], LMAX);
+        if (!ctx) continue;
+        errors e = run_case(ctx, &bc, 0);
+        errors_max(&e, run_case(ctx, &rev, 0));
+        harness_note("%s: worst error/tol both windings %.2f, grad %.2f", isas[i], e.coef, e.grad);
+        shl_ctx_destroy(ctx);
+    }
+}
+
+SHL_TEST(simd_dispatch)
+{
+    const shl__isa *best = shl__isa_find("avx2");
+    if (!best) best = shl__isa_find("neon");
+    if (!best) best = shl__isa_find("scalar");
+    CHECK(best != NULL);
+    shl_ctx *ctx = NULL;
+    const char *old = getenv("SHLIGHT_ISA");
+    char saved[64] = "";
+    if (old) snprintf(saved, sizeof saved, "%s", old);
+    unsetenv("SHLIGHT_ISA");
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK && best && !strcmp(shl_ctx_isa(ctx), best->name));
+    shl_ctx_destroy(ctx);
+    const char *values[3] = {"bogus", "", "AVX2"}; /* ignored: the best ISA */
+    for (int i = 0; i < 3; ++i) {
+        setenv("SHLIGHT_ISA", values[i], 1);
+        CHECK(shl_ctx_create(2, &ctx) == SHL_OK && best && !strcmp(shl_ctx_isa(ctx), best->name));
+        shl_ctx_destroy(ctx);
+    }
+    if (old) setenv("SHLIGHT_ISA", saved, 1);
+    else unsetenv("SHLIGHT_ISA");
+    ctx = isa_ctx("scalar", 2);
+    CHECK(ctx != NULL);
+    shl_ctx_destroy(ctx);
+    CHECK(!strcmp(shl_ctx_isa(NULL), ""));
+    const char *info = shl_build_info();
+    CHECK(info && strstr(info, "scalar") && strstr(info, SHL_VERSION_STRING));
+    for (int i = 0; i < NISA; ++i) /* every ISA this CPU runs is listed as compiled in */
+        if (shl__isa_find(isas[i])) CHECK(strstr(info, isas[i]) != NULL);
+    harness_note("default %s; %s", best ? best->name : "?", info);
+}
+
+SHL_TEST(simd_bad_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(3, &ctx) == SHL_OK);
+    const float v[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    float pts[6] = {0.2f, 0.3f, 1.0f, 0.5f, 0.5f, -1.0f}, c[33], g[97], big[3 * (SHL_MAX_VERTS + 1)] = {0};
+    for (int k = 0; k < 33; ++k) c[k] = 7.0f;
+    for (int k = 0; k < 97; ++k) g[k] = 7.0f;
+    CHECK(shl_polygon_batch_f(NULL, v, 4, 2, pts, c, g) == SHL_ENULL);
+    CHECK(shl_polygon_batch_f(ctx, NULL, 4, 2, pts, c, g) == SHL_ENULL);
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 2, NULL, c, g) == SHL_ENULL);
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 2, pts, NULL, g) == SHL_ENULL);
+    CHECK(shl_polygon_batch_f(ctx, v, 2, 2, pts, c, g) == SHL_ENVERTS);
+    CHECK(shl_polygon_batch_f(ctx, big, SHL_MAX_VERTS + 1, 2, pts, c, g) == SHL_ENVERTS);
+    CHECK(shl_polygon_batch_f(ctx, v, 4, -1, pts, c, g) == SHL_EDOMAIN);
+    pts[5] = NAN; /* the last point: checked before anything is written */
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 2, pts, c, g) == SHL_ENONFINITE);
+    pts[5] = -1.0f;
+    float vbad[12];
+    memcpy(vbad, v, sizeof v);
+    vbad[4] = INFINITY;
+    CHECK(shl_polygon_batch_f(ctx, vbad, 4, 2, pts, c, g) == SHL_ENONFINITE);
+    shl__alloc_fail_after = 0;
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 2, pts, c, g) == SHL_ENOMEM);
+    shl__alloc_fail_after = -1;
+    for (int k = 0; k < 33; ++k) CHECK(c[k] == 7.0f);
+    for (int k = 0; k < 97; ++k) CHECK(g[k] == 7.0f);
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 0, NULL, NULL, NULL) == SHL_OK);
+    CHECK(shl_polygon_batch_f(ctx, v, 4, 2, pts, c, NULL) == SHL_OK && c[0] > 0.0f && c[32] == 7.0f);
+    shl_ctx_destroy(ctx);
+}
