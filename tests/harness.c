@@ -1,9 +1,11 @@
-/* Test runner: runs every registered test (or those whose name contains argv[1]),
- * prints one line per test, and ends with "N passed, M failed". */
+/* Test runner: runs every registered test, or those whose name contains one of
+ * the comma-separated substrings of argv[1]; prints one line per test with its
+ * time, and ends with "N passed, M failed". */
 #include "harness.h"
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define MAX_TESTS 1024
 
@@ -45,6 +47,30 @@ void harness_note(const char *fmt, ...)
 
 int harness_failed_current(void) { return current_failures; }
 
+static int matches(const char *name, const char *filter)
+{
+    if (!filter) return 1;
+    const char *p = filter;
+    while (*p) {
+        const size_t len = strcspn(p, ",");
+        char part[128];
+        if (len > 0 && len < sizeof part) {
+            memcpy(part, p, len);
+            part[len] = '\0';
+            if (strstr(name, part)) return 1;
+        }
+        p += len + (p[len] == ',');
+    }
+    return 0;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return 1e3 * (double)ts.tv_sec + 1e-6 * (double)ts.tv_nsec;
+}
+
 static int by_name(const void *a, const void *b)
 {
     const char *na = *(const char *const *)a, *nb = *(const char *const *)b;
@@ -57,16 +83,18 @@ int main(int argc, char **argv)
     int passed = 0, failed = 0;
     qsort(tests, (size_t)ntests, sizeof tests[0], by_name);
     for (int i = 0; i < ntests; ++i) {
-        if (filter && !strstr(tests[i].name, filter)) continue;
+        if (!matches(tests[i].name, filter)) continue;
         current_failures = 0;
         notes[0] = '\0';
+        const double t0 = now_ms();
         tests[i].fn();
+        const double ms = now_ms() - t0;
         if (current_failures == 0) {
             ++passed;
-            printf("ok   %s%s%s\n", tests[i].name, notes[0] ? "  -- " : "", notes);
+            printf("ok   %s (%.0f ms)%s%s\n", tests[i].name, ms, notes[0] ? "  -- " : "", notes);
         } else {
             ++failed;
-            printf("FAIL %s (%d failed checks)%s%s\n", tests[i].name, current_failures,
+            printf("FAIL %s (%d failed checks, %.0f ms)%s%s\n", tests[i].name, current_failures, ms,
                    notes[0] ? "  -- " : "", notes);
         }
         fflush(stdout);

@@ -1,0 +1,42 @@
+/* Per-vertex SH lighting of a scene's lights by one of several methods, all
+ * producing the layout of shl_lights_eval (rgb[c*nc + k] per point), in float:
+ *  - ANALYTIC:   shl_lights_eval_batch per vertex (double; Wang 2018), polygons and spheres;
+ *  - ANALYTIC_F: shl_polygon_batch_f per light (float, SIMD), spheres by shl_sphere_f;
+ *  - GRID:       a res^3 grid over the receivers (shl_grid_fill) interpolated by
+ *                shl_grid_interp (Hermite, trilinear or Taylor);
+ *  - MC:         Monte Carlo projection, N samples per vertex (light picked by power,
+ *                polygons sampled by area, spheres by cone);
+ *  - MONOMIAL:   the monomial-moment baseline (bench/common/monomial.h) per polygon,
+ *                spheres by shl_sphere;
+ *  - SINGLE / TAYLOR1: one sample at a point, constant or extrapolated with its gradient
+ *                (Annen 2004 Eq. 14). */
+#ifndef SHL_BENCH_LIGHTING_H
+#define SHL_BENCH_LIGHTING_H
+
+#include "scene.h"
+#include <stddef.h>
+
+typedef enum { LM_ANALYTIC, LM_ANALYTIC_F, LM_GRID, LM_MC, LM_MONOMIAL, LM_SINGLE, LM_TAYLOR1 } lighting_kind;
+
+typedef struct {
+    lighting_kind kind;
+    int lmax;
+    int grid_res, interp, grid_storage; /* GRID: resolution, SHL_INTERP_*, SHL_GRID_FLOAT / DOUBLE */
+    double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR */
+    long mc_samples;                    /* MC */
+    double point[3];                    /* SINGLE, TAYLOR1: where the sample is taken */
+} lighting_method;
+
+typedef struct lighting lighting;
+
+/* Per-frame preparation (grid fill, single sample) over the receiver box [lo, hi];
+ * *fill_seconds: its wall time.  NULL on failure. */
+lighting *lighting_prepare(const scene *s, const lighting_method *m, const double lo[3], const double hi[3],
+                           int nthreads, double *fill_seconds);
+/* Coefficients at n points into coef[(size_t)p * 3 * nc ...].  0 or -1. */
+int lighting_eval(const lighting *L, long n, const double *pts, float *coef, int nthreads);
+void lighting_free(lighting *L);
+/* "grid 8^3 Hermite" etc. */
+const char *lighting_name(const lighting_method *m, char *buf, size_t len);
+
+#endif

@@ -1,0 +1,42 @@
+/* Software rasterizer: perspective camera, near-plane clipping, z-buffer,
+ * multi-threaded 32x32 tiles.  raster_draw computes a visibility buffer
+ * (mesh, triangle and perspective-correct barycentrics per pixel centre);
+ * raster_resolve then interpolates any per-vertex colours through it, so one
+ * visibility pass serves every lighting method compared on a scene. */
+#ifndef SHL_BENCH_RASTER_H
+#define SHL_BENCH_RASTER_H
+
+typedef struct {
+    double eye[3], target[3], up[3];
+    double fov_deg; /* vertical field of view */
+} camera;
+
+typedef struct {
+    int nv, nt;
+    const double *pos; /* 3*nv */
+    const int *tri;    /* 3*nt */
+    int back_black;    /* resolve: triangles seen from behind (clockwise on screen) are black */
+} raster_mesh;
+
+typedef struct {
+    int w, h;
+    float *depth;          /* 1 / view depth; 0: background */
+    int *mesh, *tri;       /* mesh index and triangle per pixel (-1: background) */
+    float *bary;           /* 3 per pixel: weights of the triangle's vertices */
+    unsigned char *back;   /* 1: the triangle is seen from behind */
+} framebuf;
+
+int framebuf_init(framebuf *fb, int w, int h); /* 0 or -1 */
+void framebuf_free(framebuf *fb);
+
+/* Visibility of the meshes (clears fb first).  0 or -1 (out of memory). */
+int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int nmeshes, int nthreads);
+
+/* rgb[3*w*h] from per-vertex colours: colors[m] holds 3*nv floats for mesh m;
+ * background pixels are black. */
+void raster_resolve(const framebuf *fb, const raster_mesh *meshes, const float *const *colors, float *rgb, int nthreads);
+
+/* mask[w*h] = 1 where mesh `m` is visible. */
+void raster_mask(const framebuf *fb, int m, unsigned char *mask);
+
+#endif

@@ -1,0 +1,346 @@
+/* libFuzzer target: SH grids -- shl_grid_bytes_per_node / create / fill (1
+ * thread) / node_position / get_node / set_node / interp (all methods) / destroy.
+ *
+ * Input: lmax byte (0..6 used), flags byte (bit 0: double storage, bit 1:
+ * allocation failures, bit 2: set_node), lo[3], hi[3], res bytes, light count and
+ * lights (polygons and spheres), nthreads byte, then interpolation requests
+ * (method, taylor_b, points).
+ * Properties:
+ *  - SHL_OK or the documented code (lo >= hi, res outside 2..1024, bad storage,
+ *    non-finite, nthreads outside 1..256, bad method, taylor_b non-finite or
+ *    <= 0, npts < 0, SHL_ENOMEM under injected failures); nothing written on
+ *    error (the grid keeps its nodes when fill fails);
+ *  - every node equals shl_lights_eval at shl_grid_node_position, rounded to the
+ *    storage type (bit for bit); the last node of an axis is exactly hi;
+ *  - interpolation outputs are finite when the nodes are;
+ *  - trilinear values lie within [min, max] of the cell's corner values (checked
+ *    against all nodes), up to 1e-12 relative;
+ *  - at a node position, trilinear, Hermite and Taylor return the node's values
+ *    (to 1e-9 of the values' and gradients' scale);
+ *  - a point outside the box gives the same result, bit for bit, as the point
+ *    clamped to the box (documented);
+ *  - interp with 1 or 2 threads gives identical results (documented). */
+#include "fuzz_common.h"
+
+enum { MAXL = 3, MAXPTS = 6 };
+
+/* the lights added, to bound the gradient: sum_i |rgb_i| x (polygon: K_l G_i, the
+ * moving-boundary bound of fuzz_polygon.c; sphere: K_l 2 pi s (1 + s/c) / d) */
+typedef struct {
+    int sphere;
+    fz_poly P;
+    double c[3], r, rgbmax;
+} glight;
+static glight GL[MAXL];
+static int ngl;
+
+static long double grad_bound(const double x[3], int lmax)
+{
+    long double b = 0.0L;
+    for (int i = 0; i < ngl; ++i) {
+        const glight *li = &GL[i];
+        if (li->sphere) {
+            long double d2 = 0.0L;
+            for (int k = 0; k < 3; ++k) d2 += ((long double)li->c[k] - x[k]) * ((long double)li->c[k] - x[k]);
+            const long double d = sqrtl(d2), r = li->r;
+            if (d <= r * (1.0L - 1e-12L)) continue;         /* inside: gradient 0 */
+            if (d < r * (1.0L + 1e-12L)) return INFINITY;  /* at the surface: unbounded */
+            const long double s = r / d, c = sqrtl((d - r) * (d + r)) / d;
+            b += li->rgbmax * fz_kl(lmax) * 2.0L * M_PI * s * (1.0L + s / c) / d;
+        } else {
+            fz_geom G;
+            if (!(li->P.structured && li->P.exact) || !fz_poly_geom(&li->P, x, &G)) return INFINITY;
+            b += li->rgbmax * fz_kl(lmax) * G.gsum;
+        }
+    }
+    return b;
+}
+
+/* K5 (src/interp.c, taylor_weights): the distances to the 8 corners are
+ * sqrt(dx^2 + dy^2 + dz^2) without scaling: for a cell above ~2^511 (1e154) they
+ * overflow, (d_min / d_j)^b = inf / inf and the Taylor result is NaN even with all
+ * nodes zero; below ~2^-537 they underflow to 0 and every corner gets weight 1/8. */
+static int k5_taylor_cell_out_of_range(const double lo[3], const double hi[3], const int res[3])
+{
+    double hmax = 0.0;
+    for (int a = 0; a < 3; ++a) hmax = fmax(hmax, (hi[a] - lo[a]) / (res[a] - 1));
+    return !(hmax < 0x1p500 && hmax > 0x1p-480);
+}
+
+static int node_count(const int res[3]) { return res[0] * res[1] * res[2]; }
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    fz_target_name = "fuzz_grid";
+    fz_in in = {data, size, 0};
+    const int lsel = fz_lmax(&in);
+    const int lmax = lsel < 0 || lsel > SHL_LMAX_MAX ? lsel : lsel % 7;
+    const uint8_t flags = fz_u8(&in);
+    int storage = flags & 1 ? SHL_GRID_DOUBLE : SHL_GRID_FLOAT;
+    if ((flags & 0x30) == 0x30) storage = 2 + (flags >> 6); /* invalid */
+    const int allocs = (flags >> 1) & 1;
+    double lo[3], hi[3];
+    int res[3];
+    for (int a = 0; a < 3; ++a) {
+        const uint8_t m = fz_u8(&in);
+        lo[a] = fz_real(&in);
+        hi[a] = m & 1 ? fz_real(&in) : lo[a] + ((m >> 1) & 1 ? fz_real(&in) : (double)(m >> 2) / 16.0); /* hi = lo + extent */
+    }
+    for (int a = 0; a < 3; ++a) {
+        const uint8_t b = fz_u8(&in);
+        res[a] = b < 250 ? 2 + b % 3 : b == 250 ? 1 : b == 251 ? 0 : b == 252 ? SHL_GRID_RES_MAX + 1 : -5;
+    }
+    { /* bytes per node */
+        int bytes = -1;
+        const int st = shl_grid_bytes_per_node(lmax, storage, &bytes);
+        const int want = lmax < 0 || lmax > SHL_LMAX_MAX ? SHL_ELMAX
+                         : storage != SHL_GRID_FLOAT && storage != SHL_GRID_DOUBLE ? SHL_EDOMAIN : SHL_OK;
+        FUZZ_CHECK(st == want, "bytes_per_node %d, want %d", st, want);
+        if (st == SHL_OK)
+            FUZZ_CHECK(bytes == 12 * SHL_NCOEFFS(lmax) * (storage == SHL_GRID_DOUBLE ? 8 : 4), "bytes %d", bytes);
+        else FUZZ_CHECK(bytes == -1, "bytes written on error");
+    }
+    if (lmax < 0 || lmax > SHL_LMAX_MAX) return 0;
+    const shl_ctx *ctx = fz_ctx(lmax);
+    const int nc = SHL_NCOEFFS(lmax), nv = 3 * nc, node_len = 12 * nc;
+
+    int want = SHL_OK;
+    if (storage != SHL_GRID_FLOAT && storage != SHL_GRID_DOUBLE) want = SHL_EDOMAIN;
+    else if (!all_finite_d(lo, 3) || !all_finite_d(hi, 3)) want = SHL_ENONFINITE;
+    else
+        for (int a = 0; a < 3; ++a)
+            if (res[a] < 2 || res[a] > SHL_GRID_RES_MAX || !(lo[a] < hi[a]) || !isfinite((hi[a] - lo[a]) / (res[a] - 1)))
+                want = SHL_EDOMAIN;
+    fz_dump_vec("lo", lo, 3);
+    fz_dump_vec("hi", hi, 3);
+    if (fz_is_verbose()) fprintf(stderr, "res %d %d %d storage %d lmax %d\n", res[0], res[1], res[2], storage, lmax);
+    shl_grid *grid = (shl_grid *)&in;
+    if (allocs && want == SHL_OK) {
+        for (long f = 0; f < 2; ++f) {
+            shl__alloc_fail_after = f;
+            const int st = shl_grid_create(ctx, lo, hi, res, storage, &grid);
+            shl__alloc_fail_after = -1;
+            FUZZ_CHECK(st == SHL_ENOMEM && grid == (shl_grid *)&in, "create under ENOMEM (%ld): %d", f, st);
+        }
+    }
+    const int st = shl_grid_create(ctx, lo, hi, res, storage, &grid);
+    FUZZ_CHECK(st == want, "create %d, want %d", st, want);
+    if (st != SHL_OK) {
+        FUZZ_CHECK(grid == (shl_grid *)&in, "grid written on error");
+        return 0;
+    }
+    const int nn = node_count(res);
+    double *node = malloc(sizeof(double) * (size_t)node_len * nn);
+    double *direct = malloc(sizeof(double) * node_len);
+    /* a fresh grid is zero-filled */
+    {
+        const int idx[3] = {res[0] - 1, 0, res[2] / 2};
+        FUZZ_CHECK(shl_grid_get_node(grid, idx, direct, direct + nv) == SHL_OK, "get_node");
+        for (int k = 0; k < node_len; ++k) FUZZ_CHECK(direct[k] == 0.0, "fresh grid not zero");
+    }
+    /* lights */
+    shl_lights *set = NULL;
+    FUZZ_CHECK(shl_lights_create(&set) == SHL_OK, "lights");
+    const int nl = fz_u8(&in) % (MAXL + 1);
+    int in_range = 1;
+    ngl = 0;
+    long double magnitude = 0.0L;
+    for (int i = 0; i < nl; ++i) {
+        const uint8_t kind = fz_u8(&in);
+        double rgb[3];
+        for (int c = 0; c < 3; ++c) rgb[c] = (int8_t)fz_u8(&in) / 16.0;
+        if (kind & 1) {
+            double c[3];
+            for (int k = 0; k < 3; ++k) c[k] = lo[k] + fz_real(&in);
+            const double r = fz_real(&in);
+            fz_dump_vec("sphere centre", c, 3);
+            fz_dump_vec("sphere radius", &r, 1);
+            if (shl_lights_add_sphere(set, c, r, rgb) != SHL_OK) continue;
+            GL[ngl].sphere = 1;
+            memcpy(GL[ngl].c, c, sizeof c);
+            GL[ngl].r = r;
+            GL[ngl++].rgbmax = fmax(fabs(rgb[0]), fmax(fabs(rgb[1]), fabs(rgb[2])));
+            for (int k = 0; k < 3; ++k) in_range &= isfinite(c[k] - lo[k]) && isfinite(c[k] - hi[k]); /* K4 */
+            magnitude += 8.0L * 4.0L * M_PI * fz_kl(lmax);
+        } else {
+            fz_poly P;
+            fz_polygon(&in, &P);
+            fz_dump_poly(&P);
+            if (shl_lights_add_polygon(set, P.v, P.n, rgb, (kind >> 1) & 1) != SHL_OK) continue;
+            GL[ngl].sphere = 0;
+            GL[ngl].P = P;
+            GL[ngl++].rgbmax = fmax(fabs(rgb[0]), fmax(fabs(rgb[1]), fabs(rgb[2])));
+            /* K1: judged at the box corners and centre */
+            for (int j = 0; j < 9; ++j) {
+                double x[3];
+                for (int a = 0; a < 3; ++a) x[a] = j == 8 ? 0.5 * lo[a] + 0.5 * hi[a] : (j >> a) & 1 ? hi[a] : lo[a];
+                in_range &= !fz_k1_poly_out_of_range(P.v, P.n, x);
+            }
+            magnitude += 8.0L * 4.0L * M_PI * fz_kl(lmax) * P.n;
+        }
+    }
+    /* fill */
+    const uint8_t tb = fz_u8(&in);
+    const int nthreads = tb < 250 ? 1 : tb == 250 ? 0 : tb == 251 ? SHL_MAX_THREADS + 1 : -1;
+    const int want_fill = nthreads == 1 ? SHL_OK : SHL_EDOMAIN;
+    if (allocs && want_fill == SHL_OK) {
+        shl__alloc_fail_after = 0;
+        const int sf = shl_grid_fill(grid, set, nthreads);
+        shl__alloc_fail_after = -1;
+        FUZZ_CHECK(sf == SHL_ENOMEM, "fill under ENOMEM: %d", sf);
+        const int idx[3] = {0, 0, 0};
+        FUZZ_CHECK(shl_grid_get_node(grid, idx, direct, direct + nv) == SHL_OK && direct[0] == 0.0, "fill failed but wrote");
+    }
+    const int sf = shl_grid_fill(grid, set, nthreads);
+    FUZZ_CHECK(sf == want_fill, "fill %d, want %d", sf, want_fill);
+    if (sf != SHL_OK) goto out;
+    const int check_values = !fz_known_issues_skipped() || in_range;
+    /* nodes: equal to the direct evaluation at their positions, rounded to the storage */
+    int nodes_finite = 1;
+    double vmax = 0.0, gmax = 0.0;
+    for (int n = 0; n < nn; ++n) {
+        const int idx[3] = {n % res[0], n / res[0] % res[1], n / res[0] / res[1]};
+        double pos[3];
+        FUZZ_CHECK(shl_grid_node_position(grid, idx, pos) == SHL_OK, "node_position");
+        for (int a = 0; a < 3; ++a)
+            if (idx[a] == res[a] - 1) FUZZ_CHECK(pos[a] == hi[a], "last node %d of axis %d at %.17g, hi %.17g", idx[a], a, pos[a], hi[a]);
+            else if (idx[a] == 0) FUZZ_CHECK(pos[a] == lo[a], "first node at %.17g, lo %.17g", pos[a], lo[a]);
+        double *nd = node + (size_t)node_len * n;
+        FUZZ_CHECK(shl_grid_get_node(grid, idx, nd, nd + nv) == SHL_OK, "get_node");
+        FUZZ_CHECK(shl_lights_eval(ctx, set, pos, direct, direct + nv) == SHL_OK, "lights_eval");
+        for (int k = 0; k < node_len; ++k) {
+            const double want_v = storage == SHL_GRID_FLOAT ? (double)(float)direct[k] : direct[k];
+            FUZZ_CHECK(memcmp(&nd[k], &want_v, sizeof(double)) == 0 || (isnan(nd[k]) && isnan(want_v)),
+                       "node %d value %d: %.17g, direct %.17g", n, k, nd[k], want_v);
+        }
+        if (fz_is_verbose() && !all_finite_d(nd, node_len)) fz_dump_vec("non-finite node at", pos, 3);
+        nodes_finite &= all_finite_d(nd, node_len);
+        if (check_values && magnitude < 1e30L) {
+            FUZZ_CHECK(all_finite_d(nd, nv), "non-finite node value (node %d)", n);
+            const long double gb = grad_bound(pos, lmax);
+            if (gb < (storage == SHL_GRID_DOUBLE ? DBL_MAX / 1e10 : FLT_MAX / 1e4))
+                FUZZ_CHECK(all_finite_d(nd + nv, node_len - nv), "non-finite node gradient (node %d, bound %.3Lg)", n, gb);
+        }
+        for (int k = 0; k < nv; ++k) vmax = fmax(vmax, fabs(nd[k]));
+        for (int k = nv; k < node_len; ++k) gmax = fmax(gmax, fabs(nd[k]));
+    }
+    if (!nodes_finite) goto out; /* a gradient too large for the storage type (checked above) */
+    {   /* set_node / get_node round trip */
+        const int idx[3] = {fz_u8(&in) % res[0], fz_u8(&in) % res[1], fz_u8(&in) % res[2]};
+        if (flags & 4) {
+            double *w = node + (size_t)node_len * (idx[0] + res[0] * (idx[1] + res[1] * idx[2]));
+            const int sw = shl_grid_set_node(grid, idx, w, w + nv);
+            FUZZ_CHECK(sw == SHL_OK, "set_node %d", sw);
+            FUZZ_CHECK(shl_grid_get_node(grid, idx, direct, direct + nv) == SHL_OK, "get_node");
+            FUZZ_CHECK(memcmp(direct, w, sizeof(double) * node_len) == 0, "set/get round trip");
+            w[0] = NAN;
+            FUZZ_CHECK(shl_grid_set_node(grid, idx, w, w + nv) == SHL_ENONFINITE, "set_node NaN");
+            FUZZ_CHECK(shl_grid_get_node(grid, idx, direct, NULL) == SHL_OK && !isnan(direct[0]), "NaN stored");
+            w[0] = direct[0];
+        }
+        const int bad[3] = {idx[0], -1, res[2]};
+        FUZZ_CHECK(shl_grid_get_node(grid, bad, direct, NULL) == SHL_EDOMAIN, "get_node out of range");
+    }
+    /* interpolation */
+    const int nreq = 1 + fz_u8(&in) % 3;
+    for (int q = 0; q < nreq; ++q) {
+        const uint8_t mb = fz_u8(&in);
+        const int method = (mb & 15) < 15 ? (mb & 15) % 3 : 3 + mb; /* 15: an invalid method */
+        const double b = (mb & 0x40) ? fz_real(&in) : 0.5 + (mb >> 4);
+        const int np = fz_u8(&in) % (MAXPTS + 1);
+        double pts[3 * MAXPTS + 3], clamped[3 * MAXPTS + 3];
+        for (int p = 0; p < np; ++p) {
+            const uint8_t pm = fz_u8(&in);
+            for (int a = 0; a < 3; ++a) {
+                if (pm % 4 == 0) pts[3 * p + a] = fz_real(&in);                          /* anywhere */
+                else if (pm % 4 == 1) pts[3 * p + a] = lo[a] + (hi[a] - lo[a]) * (fz_u8(&in) / 255.0);
+                else { /* a node position */
+                    const int i = fz_u8(&in) % res[a];
+                    pts[3 * p + a] = i == res[a] - 1 ? hi[a] : lo[a] + i * ((hi[a] - lo[a]) / (res[a] - 1));
+                }
+                clamped[3 * p + a] = fmin(fmax(pts[3 * p + a], lo[a]), hi[a]);
+            }
+        }
+        int wi = SHL_OK;
+        if (method != SHL_INTERP_TRILINEAR && method != SHL_INTERP_TAYLOR && method != SHL_INTERP_HERMITE) wi = SHL_EDOMAIN;
+        else if (method == SHL_INTERP_TAYLOR && !isfinite(b)) wi = SHL_ENONFINITE;
+        else if (method == SHL_INTERP_TAYLOR && !(b > 0.0)) wi = SHL_EDOMAIN;
+        else if (!all_finite_d(pts, 3 * np)) wi = SHL_ENONFINITE;
+        const size_t ob = sizeof(double) * nv * (np > 0 ? np : 1);
+        double *out = fz_guarded(ob), *out2 = fz_guarded(ob), *outc = fz_guarded(ob);
+        const int si = shl_grid_interp(grid, method, b, np, pts, out, 1);
+        FUZZ_CHECK(si == wi, "interp %d, want %d (method %d, b %g)", si, wi, method, b);
+        if (si != SHL_OK) {
+            FUZZ_CHECK(fz_untouched(out, ob), "interp wrote on error");
+            goto next;
+        }
+        if (np == 0) goto next;
+        if (method == SHL_INTERP_TAYLOR && fz_known_issues_skipped() && k5_taylor_cell_out_of_range(lo, hi, res))
+            goto next; /* K5 */
+        { /* Taylor and Hermite add (p - p_j) . grad_j, resp. h grad terms: finite while those are */
+            double hmax = 0.0;
+            for (int a = 0; a < 3; ++a) hmax = fmax(hmax, (hi[a] - lo[a]) / (res[a] - 1));
+            if (method == SHL_INTERP_TRILINEAR || vmax + 4.0 * gmax * hmax < 1e300)
+                FUZZ_CHECK(all_finite_d(out, nv * np), "non-finite interpolation (method %d)", method);
+        }
+        FUZZ_CHECK(shl_grid_interp(grid, method, b, np, pts, out2, 2) == SHL_OK, "interp 2 threads");
+        FUZZ_CHECK(memcmp(out, out2, ob) == 0, "interp depends on the thread count");
+        FUZZ_CHECK(shl_grid_interp(grid, method, b, np, clamped, outc, 1) == SHL_OK, "interp clamped");
+        FUZZ_CHECK(memcmp(out, outc, ob) == 0, "outside point differs from the clamped point (method %d)", method);
+        for (int p = 0; p < np; ++p) {
+            const double *o = out + (size_t)nv * p;
+            if (method == SHL_INTERP_TRILINEAR)
+                for (int k = 0; k < nv; ++k) {
+                    double mn = INFINITY, mx = -INFINITY;
+                    for (int n = 0; n < nn; ++n) mn = fmin(mn, node[(size_t)node_len * n + k]), mx = fmax(mx, node[(size_t)node_len * n + k]);
+                    const double tol = 1e-12 * fmax(fabs(mn), fabs(mx)) + 1e-300;
+                    FUZZ_CHECK(o[k] >= mn - tol && o[k] <= mx + tol, "trilinear value %d = %.17g outside [%.17g, %.17g]", k, o[k], mn, mx);
+                }
+            /* at a node: its values */
+            int at[3], is_node = 1;
+            for (int a = 0; a < 3; ++a) {
+                at[a] = -1;
+                for (int i = 0; i < res[a]; ++i) {
+                    const double pos = i == res[a] - 1 ? hi[a] : lo[a] + i * ((hi[a] - lo[a]) / (res[a] - 1));
+                    if (clamped[3 * p + a] == pos) at[a] = i;
+                }
+                is_node &= at[a] >= 0;
+            }
+            if (!is_node) continue;
+            if (method == SHL_INTERP_TAYLOR) { /* weights ~ dist^-b: only an exact hit (t == i) pins the node */
+                int exact_hit = 1;
+                for (int a = 0; a < 3; ++a) {
+                    const double h = (hi[a] - lo[a]) / (res[a] - 1), t = (clamped[3 * p + a] - lo[a]) / h;
+                    exact_hit &= t == (double)at[a];
+                }
+                if (!exact_hit) continue;
+            }
+            const double *nd = node + (size_t)node_len * (at[0] + res[0] * (at[1] + res[1] * at[2]));
+            /* a node's position lo + i h is rounded: the library sees it at t = i + delta / h in the
+             * cell, |delta| <= ulp(max(|lo|, |hi|)) (at least a denormal ulp), and interpolates there;
+             * a spacing that underflows to 0 (accepted by shl_grid_create) makes this unbounded */
+            double tol = 1e-300;
+            for (int a = 0; a < 3; ++a) {
+                const double h = (hi[a] - lo[a]) / (res[a] - 1);
+                const double du = (2.0 * DBL_EPSILON * fmax(fabs(lo[a]), fabs(hi[a])) + 0x1p-1073) / h;
+                tol += du < 1e300 ? 1e-9 * (vmax + gmax * h) + 4.0 * du * (2.0 * vmax + gmax * h) : INFINITY;
+            }
+            if (fz_is_verbose())
+                fprintf(stderr, "method %d b %g at node (%d %d %d): vmax %g gmax %g tol %g point %.17g %.17g %.17g\n", method, b,
+                        at[0], at[1], at[2], vmax, gmax, tol, pts[3 * p], pts[3 * p + 1], pts[3 * p + 2]);
+            for (int k = 0; k < nv; ++k)
+                FUZZ_CHECK(fabs(o[k] - nd[k]) <= tol, "method %d at node (%d,%d,%d): value %d = %.17g, node %.17g", method,
+                           at[0], at[1], at[2], k, o[k], nd[k]);
+        }
+    next:
+        free(out);
+        free(out2);
+        free(outc);
+    }
+out:
+    free(node);
+    free(direct);
+    shl_lights_destroy(set);
+    shl_grid_destroy(grid);
+    return 0;
+}
