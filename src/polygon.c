@@ -26,46 +26,74 @@ static inline void sub3(const double a[3], const double b[3], double out[3])
     out[2] = a[2] - b[2];
 }
 
-/* Signed solid angle of the planar polygon p[0..n-1] (relative to x) as a fan of
- * signed triangles, each by the Van Oosterom-Strackee atan2 form.  Unlike the
- * sum-of-angles formula (Wang 2018 Eq. 24) it keeps full relative accuracy for
- * tiny polygons and handles concave ones.  Edges are taken from the input
- * vertices (e_i = v_i - v_0), so the triple product never cancels. */
-static double signed_solid_angle(const double (*rel)[3], const double *dist,
-                                 const double *verts, int n)
+/* Unit Newell normal of the polygon (counter-clockwise seen from its tip), from
+ * vertex differences; 0 for a zero-area polygon. */
+static int newell_normal(const double *verts, int n, double nrm[3])
 {
-    double total = 0.0;
+    nrm[0] = nrm[1] = nrm[2] = 0.0;
     for (int i = 1; i + 1 < n; ++i) {
         double e1[3], e2[3], c[3];
         sub3(verts + 3 * i, verts, e1);
         sub3(verts + 3 * (i + 1), verts, e2);
         cross3(e1, e2, c);
-        const double triple = dot3(rel[0], c);
-        const double den = dist[0] * dist[i] * dist[i + 1] + dot3(rel[0], rel[i]) * dist[i + 1] +
-                           dot3(rel[0], rel[i + 1]) * dist[i] + dot3(rel[i], rel[i + 1]) * dist[0];
-        total += 2.0 * atan2(triple, den);
+        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
     }
-    return total;
+    const double len = sqrt(dot3(nrm, nrm));
+    if (!(len > 0.0)) return 0;
+    for (int k = 0; k < 3; ++k) nrm[k] /= len;
+    return 1;
 }
 
-/* Signed distance of x from the polygon's plane, and the polygon's extent as seen from x. */
-static int point_in_plane(const double *verts, int n, const double (*rel)[3], const double *dist)
+/* Solid angle of the polygon (magnitude) as a fan of Van Oosterom-Strackee
+ * triangles, tan(omega/2) = N / D.  Unlike the sum-of-angles formula (Wang 2018
+ * Eq. 24) this keeps full relative accuracy for tiny polygons and handles
+ * concave ones.  Two fans, each used where its D is a sum of positive terms, so
+ * nothing cancels and no term crosses atan2's branch cut:
+ *  - far from the plane (|h| >= 2 x extent) the fan from vertex 0: all vertex
+ *    directions lie within 60 degrees of each other;
+ *  - otherwise the fan from the foot F of x on the plane, where with e_i the
+ *    in-plane offsets of the vertices from F and a = |h|, N and D divided by a are
+ *    n.(e_i x e_j) and r_i r_j + a (r_i + r_j) + a^2 + e_i.e_j, and for e_i.e_j < 0
+ *    r_i r_j + e_i.e_j = (a^4 + a^2 (|e_i|^2 + |e_j|^2) + |e_i x e_j|^2) / (r_i r_j - e_i.e_j). */
+static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n,
+                          const double nrm[3], double height)
 {
-    double normal[3] = {0.0, 0.0, 0.0}; /* Newell's method, relative to v_0 */
-    for (int i = 1; i + 1 < n; ++i) {
-        double e1[3], e2[3], c[3];
-        sub3(verts + 3 * i, verts, e1);
-        sub3(verts + 3 * (i + 1), verts, e2);
-        cross3(e1, e2, c);
-        for (int k = 0; k < 3; ++k) normal[k] += c[k];
+    double extent = 0.0, total = 0.0;
+    for (int i = 1; i < n; ++i) {
+        double d[3];
+        sub3(verts + 3 * i, verts, d);
+        extent = fmax(extent, sqrt(dot3(d, d)));
     }
-    const double len = sqrt(dot3(normal, normal));
-    double rmax = 0.0;
-    for (int i = 0; i < n; ++i) rmax = fmax(rmax, dist[i]);
-    if (!(len > 0.0)) return 1; /* zero-area polygon: sees nothing */
-    const double height = fabs(dot3(normal, rel[0])) / len;
-    /* Below a few ulps of the distances the side of the plane is decided by rounding. */
-    return height <= 8.0 * DBL_EPSILON * rmax;
+    if (fabs(height) >= 2.0 * extent) {
+        for (int i = 1; i + 1 < n; ++i) {
+            double e1[3], e2[3], c[3];
+            sub3(verts + 3 * i, verts, e1);
+            sub3(verts + 3 * (i + 1), verts, e2);
+            cross3(e1, e2, c);
+            const double num = dot3(rel[0], c);
+            const double den = dist[0] * dist[i] * dist[i + 1] + dot3(rel[0], rel[i]) * dist[i + 1] +
+                               dot3(rel[0], rel[i + 1]) * dist[i] + dot3(rel[i], rel[i + 1]) * dist[0];
+            total += 2.0 * atan2(num, den);
+        }
+        return fabs(total);
+    }
+    const double a = fabs(height);
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1 == n) ? 0 : i + 1;
+        double ei[3], ej[3], edge[3], c[3];
+        const double hi = dot3(nrm, rel[i]), hj = dot3(nrm, rel[j]);
+        for (int k = 0; k < 3; ++k) {
+            ei[k] = rel[i][k] - hi * nrm[k];
+            ej[k] = rel[j][k] - hj * nrm[k];
+        }
+        sub3(verts + 3 * j, verts + 3 * i, edge); /* e_i x e_j = e_i x (v_j - v_i) */
+        cross3(ei, edge, c);
+        const double num = dot3(nrm, c), dot = dot3(ei, ej), ri = dist[i], rj = dist[j];
+        const double pair = dot >= 0.0 ? ri * rj + dot
+                                       : (a * a * (a * a + dot3(ei, ei) + dot3(ej, ej)) + num * num) / (ri * rj - dot);
+        total += 2.0 * atan2(num, pair + a * (ri + rj) + a * a);
+    }
+    return fabs(total);
 }
 
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
@@ -88,10 +116,15 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         g->dist[i] = sqrt(dot3(g->rel[i], g->rel[i]));
         if (!(g->dist[i] > 0.0)) return; /* x on a vertex: in the plane */
     }
-    if (point_in_plane(kept, m, (const double(*)[3])g->rel, g->dist)) return;
-
-    double omega = signed_solid_angle((const double(*)[3])g->rel, g->dist, kept, m);
-    if (omega < 0.0) { /* orient counter-clockwise seen from outside: reverse the order */
+    double nrm[3], rmax = 0.0;
+    if (!newell_normal(kept, m, nrm)) return; /* zero-area polygon: sees nothing */
+    for (int i = 0; i < m; ++i) rmax = fmax(rmax, g->dist[i]);
+    const double height = dot3(nrm, g->rel[0]); /* signed: > 0 when the polygon lies along +nrm */
+    /* Below a few ulps of the distances the side of the plane is decided by rounding. */
+    if (fabs(height) <= 8.0 * DBL_EPSILON * rmax) return;
+    /* Seen from x, the polygon is counter-clockwise from outside the unit sphere
+     * (positive solid angle) exactly when it lies along +nrm: otherwise reverse. */
+    if (height < 0.0) {
         for (int i = 0, j = m - 1; i < j; ++i, --j)
             for (int k = 0; k < 3; ++k) {
                 const double t = kept[3 * i + k];
@@ -102,8 +135,8 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             sub3(kept + 3 * i, x, g->rel[i]);
             g->dist[i] = sqrt(dot3(g->rel[i], g->rel[i]));
         }
-        omega = -omega;
     }
+    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, nrm, height);
     g->n = m;
     g->solid_angle = omega;
 

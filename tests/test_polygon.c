@@ -176,7 +176,7 @@ SHL_TEST(polygon_invariants)
     CHECK(worst_wind <= 1e-13);
     CHECK(worst_add <= 1e-13);
     CHECK(worst_rot <= 1e-12);
-    CHECK(worst_l0 <= 1e-14);
+    CHECK(worst_l0 <= 4e-14); /* the foot-point fan (near-plane robustness) measures 1.2e-14 */
     harness_note("winding %.1e, additivity(l<=14) %.1e, band-energy rotation %.1e, l=0 %.1e (all /omega)",
                  worst_wind, worst_add, worst_rot, worst_l0);
     shl_ctx_destroy(ctx);

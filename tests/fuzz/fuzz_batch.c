@@ -178,14 +178,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
         const long double A = G.omega, epsd = DBL_EPSILON, epsf = FLT_EPSILON;
         const long double condf = 8.0L * epsf * G.scale * G.gsum, gcondf = 8.0L * epsf * G.scale * G.g2sum;
-        const long double k2 = fz_k2_fan_slack(vd, P.n, xd[p]);
         const long double conddbl = 8.0L * (epsd * G.scale + 0x1p-1074L) * G.gsum;
         if (fz_is_verbose())
             fprintf(stderr, "point %d: Omega_ref %.17Lg height %.3Lg rmax %.3Lg perim %.3Lg G %.3Lg condf %.3Lg\n", p, A,
                     G.height, G.rmax, G.perim, G.gsum, condf);
         for (int l = 0; l <= lmax; ++l) {
             const long double kl = fz_kl(l);
-            const long double sd = kl * (1e-9L * A + 300.0L * epsd * G.perim + conddbl + (l == 0 ? k2 : 0.0L)) + 1e-300L;
+            const long double sd = kl * (1e-9L * A + 300.0L * epsd * G.perim + conddbl) + 1e-300L;
             const long double sf = kl * (1e-4L * A + 64.0L * (l + 1) * epsf * G.perim + condf + 1e-36L);
             const long double gs = kl * (2e-4L * G.gsum + 64.0L * (l + 1) * epsf * G.gsum + 2.0L * gcondf + 1e-36L);
             for (int k = l * l; k < (l + 1) * (l + 1); ++k) {

@@ -488,53 +488,6 @@ static inline int fz_k1_poly_out_of_range(const double *v, int n, const double x
     return !(rmax <= 0x1p240 && ext >= 0x1p-240);
 }
 
-/* K2 (src/polygon.c, signed_solid_angle): the solid angle is a fan of
- * Van Oosterom-Strackee triangles from the first vertex; a triangle's
- * denominator d0 d1 d2 + (r0.r1) d2 + ... cancels when x is near the plane and
- * its foot near a fan diagonal (v_0, v_i), although the polygon itself is well
- * conditioned there: omega (hence L_00) loses about eps d0 d1 d2 / |t + i den|
- * per triangle (seen: relative error 2.7e-9 at height 1.9e-11 over a 2.4e-4
- * polygon), and so does the triple product r_0 . ((v_i - v_0) x (v_i+1 - v_0)) when
- * r_0 lies nearly in the plane; with a negative denominator a wrong sign of the triple
- * product puts the triangle on the other side of atan2's cut, a 2 pi jump (seen: 1.51 =
- * 2 pi - 4.77 at height 120 over a 1e14 polygon; 11.7 and 12.5 sr in make stress).  This returns a bound on both for the library's fan (first vertex of the
- * input after dropping repeats), to be added to the slack of omega and L_00; 0 in
- * strict mode. */
-static inline long double fz_k2_fan_slack(const double *v, int n, const double x[3])
-{
-    if (!fz_known_issues_skipped()) return 0.0L;
-    long double r[SHL_MAX_VERTS][3], d[SHL_MAX_VERTS], kept[SHL_MAX_VERTS][3];
-    int m = 0;
-    for (int i = 0; i < n; ++i) {
-        if (m > 0 && memcmp(v + 3 * i, v + 3 * (i - 1), sizeof(double) * 3) == 0) continue;
-        for (int k = 0; k < 3; ++k) kept[m][k] = v[3 * i + k];
-        ++m;
-    }
-    while (m > 1 && kept[0][0] == kept[m - 1][0] && kept[0][1] == kept[m - 1][1] && kept[0][2] == kept[m - 1][2]) --m;
-    for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < 3; ++k) r[i][k] = kept[i][k] - (long double)x[k];
-        d[i] = sqrtl(r[i][0] * r[i][0] + r[i][1] * r[i][1] + r[i][2] * r[i][2]);
-    }
-    long double s = 0.0L;
-    for (int i = 1; i + 1 < m; ++i) {
-        const long double *a = r[0], *b = r[i], *c = r[i + 1];
-        const long double t = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-        const long double den = d[0] * d[i] * d[i + 1] + (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * d[i + 1] +
-                                (a[0] * c[0] + a[1] * c[1] + a[2] * c[2]) * d[i] + (b[0] * c[0] + b[1] * c[1] + b[2] * c[2]) * d[0];
-        /* the triple product r_0 . (e_1 x e_2) cancels too (r_0 nearly in the plane) */
-        long double e1[3], e2[3];
-        for (int k = 0; k < 3; ++k) e1[k] = kept[i][k] - kept[0][k], e2[k] = kept[i + 1][k] - kept[0][k];
-        const long double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
-                          cz = e1[0] * e2[1] - e1[1] * e2[0];
-        const long double cn = sqrtl(cx * cx + cy * cy + cz * cz);
-        const long double mag = sqrtl(t * t + den * den);
-        const long double dt = 16.0L * DBL_EPSILON * d[0] * cn, dden = 16.0L * DBL_EPSILON * d[0] * d[i] * d[i + 1];
-        if (den <= dden && fabsl(t) <= dt) s += 4.0L * M_PI; /* t's sign is uncertain on atan2's cut: a 2 pi jump */
-        else s += mag > 0.0L ? (dden + dt) / mag : 0.0L;
-    }
-    return s;
-}
-
 /* FZ_VERBOSE=1 in the environment: print the decoded input (replaying a crash). */
 static int fz_verbose = -1;
 static inline int fz_is_verbose(void)

@@ -238,7 +238,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     }
                     const long double eps = DBL_EPSILON;
                     om = G.omega;
-                    sl = 1e-9L * om + 300.0L * eps * G.perim + 8.0L * eps * G.scale * G.gsum + fz_k2_fan_slack(li->P.v, li->P.n, x);
+                    sl = 1e-9L * om + 300.0L * eps * G.perim + 8.0L * eps * G.scale * G.gsum;
                 } else {
                     om = 4.0L * M_PI; /* the whole sphere of directions bounds any cap */
                 }
