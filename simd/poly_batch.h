@@ -114,7 +114,7 @@ static size_t ISA(work_bytes)(int lmax, int with_grad)
 #define KV(w, l, k) vf_load((w)->kv + ((size_t)(l) * NK + (k)) * VL)
 
 /* Lanes of a block, in double: the scaled point, the plane test of
- * shl_polygon_f (polygon.c, point_in_plane; squared form), and h = normal . (v_0 - x).
+ * shl_polygon_f (polygon.c, shl__poly_geom_init; squared form), and h = normal . (v_0 - x).
  * Lanes past nvalid, in the plane, or farther than 2^40 extents from the polygon
  * (products of three distances must stay in float range) evaluate the proxy
  * point with valid = 0.  (A valid point is at least 2^-50 extents from every

@@ -127,20 +127,17 @@ SHL_TEST(lights_vs_quadrature_reference)
 
 /* Set gradient against central differences of the set's own coefficients:
  * step 1e-4 gives truncation ~ h^2 |f'''| ~ 1e-8 and rounding ~ eps/h ~ 1e-12. */
-SHL_TEST(lights_grad_vs_finite_differences)
+/* max |grad - central differences (step h)| / max|FD| of a light set over 10
+ * random points in [-half, half]^3. */
+static double grad_vs_central_differences(const shl_ctx *ctx, const shl_lights *l, unsigned seed,
+                                          double half, double h)
 {
-    shl_ctx *ctx;
-    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
-    scene s;
-    make_scene(&s, 13);
-    shl_lights *l = scene_lights(&s, 0);
-    rng_t r = {7};
+    rng_t r = {seed};
     double worst = 0.0;
     for (int it = 0; it < 10; ++it) {
         double x[3], rgb[3 * NC], grad[9 * NC], p[3 * NC], m[3 * NC], fd[9 * NC];
-        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0);
+        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -half, half);
         CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
-        const double h = 1e-4;
         for (int a = 0; a < 3; ++a) {
             double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
             xp[a] += h;
@@ -153,6 +150,17 @@ SHL_TEST(lights_grad_vs_finite_differences)
         const double sc = max_abs(fd, 9 * NC);
         for (int k = 0; k < 9 * NC; ++k) worst = fmax(worst, fabs(grad[k] - fd[k]) / sc);
     }
+    return worst;
+}
+
+SHL_TEST(lights_grad_vs_finite_differences)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    scene s;
+    make_scene(&s, 13);
+    shl_lights *l = scene_lights(&s, 0);
+    const double worst = grad_vs_central_differences(ctx, l, 7, 1.0, 1e-4);
     CHECK(worst <= 1e-6);
     harness_note("one-sided set: max |grad - FD| / max|FD| %.1e (tol 1e-6)", worst);
     shl_lights_destroy(l);
@@ -518,25 +526,7 @@ SHL_TEST(lights_sphere_grad_vs_finite_differences)
     const double c1[3] = {0.3, 0.2, 2.0}, c2[3] = {-1.5, 0.5, -0.5}, rgb1[3] = {1, 2, 3}, rgb2[3] = {0.5, -1, 0.25};
     CHECK(shl_lights_add_sphere(l, c1, 0.9, rgb1) == SHL_OK);
     CHECK(shl_lights_add_sphere(l, c2, 0.3, rgb2) == SHL_OK);
-    rng_t r = {17};
-    double worst = 0.0;
-    for (int it = 0; it < 10; ++it) {
-        double x[3], rgb[3 * NC], grad[9 * NC], p[3 * NC], m[3 * NC], fd[9 * NC];
-        for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -0.8, 0.8);
-        CHECK(shl_lights_eval(ctx, l, x, rgb, grad) == SHL_OK);
-        const double h = 1e-5;
-        for (int a = 0; a < 3; ++a) {
-            double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
-            xp[a] += h;
-            xm[a] -= h;
-            CHECK(shl_lights_eval(ctx, l, xp, p, NULL) == SHL_OK);
-            CHECK(shl_lights_eval(ctx, l, xm, m, NULL) == SHL_OK);
-            for (int ch = 0; ch < 3; ++ch)
-                for (int k = 0; k < NC; ++k) fd[(ch * 3 + a) * NC + k] = (p[ch * NC + k] - m[ch * NC + k]) / (2 * h);
-        }
-        const double sc = max_abs(fd, 9 * NC);
-        for (int k = 0; k < 9 * NC; ++k) worst = fmax(worst, fabs(grad[k] - fd[k]) / sc);
-    }
+    const double worst = grad_vs_central_differences(ctx, l, 17, 0.8, 1e-5);
     CHECK(worst <= 1e-7);
     harness_note("two spheres: max |grad - FD| / max|FD| %.1e (tol 1e-7)", worst);
     shl_lights_destroy(l);
