@@ -32,12 +32,23 @@ typedef struct {
 typedef void (*shl__poly_batch_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts,
                                    float *coeffs, float *grad, void *work);
 
+/* One table per instruction set, defined in src/dispatch.c (designated
+ * initializers, one field per line). */
 struct shl__isa {
     const char *name;  /* "scalar", "avx2", "neon" */
     int vlen;          /* float lanes */
-    size_t (*work_bytes)(int lmax, int with_grad);
+    size_t (*poly_work_bytes)(int lmax, int with_grad);
     shl__poly_batch_fn poly_batch;
 };
+
+/* Kernels of simd/poly_batch.h, one instance per ISA (simd/<isa>/). */
+#define SHL__DECLARE_POLY_BATCH(isa)                                                                    \
+    size_t shl__poly_work_bytes_##isa(int lmax, int with_grad);                                        \
+    void shl__poly_batch_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,      \
+                               float *coeffs, float *grad, void *work);
+SHL__DECLARE_POLY_BATCH(scalar)
+SHL__DECLARE_POLY_BATCH(avx2)
+SHL__DECLARE_POLY_BATCH(neon)
 
 extern const shl__isa shl__isa_scalar;
 extern const shl__isa shl__isa_avx2;

@@ -104,7 +104,7 @@ static size_t work_floats(int lmax, int nq, work_t *w, float *base)
     return (ofs + nq * nc) * VL;
 }
 
-static size_t ISA(work_bytes)(int lmax, int with_grad)
+size_t ISA(shl__poly_work_bytes)(int lmax, int with_grad)
 {
     work_t w;
     return sizeof(float) * work_floats(lmax, with_grad ? 4 : 1, &w, NULL) + 64; /* + alignment */
@@ -482,13 +482,11 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
     }
 }
 
-static void ISA(poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs,
-                            float *grad, void *work)
+void ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs,
+                          float *grad, void *work)
 {
     if (grad)
         poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, 1);
     else
         poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, 0);
 }
-
-const shl__isa ISA(shl__isa) = {SHL_ISA_NAME, VL, ISA(work_bytes), ISA(poly_batch)};

@@ -84,7 +84,7 @@ int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts,
         if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
         return SHL_OK;
     }
-    void *work = shl__malloc(ctx->isa->work_bytes(ctx->lmax, grad != NULL));
+    void *work = shl__malloc(ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL));
     if (!work) return SHL_ENOMEM;
     ctx->isa->poly_batch(&P, ctx->lmax, npts, pts, coeffs, grad, work);
     shl__free(work);

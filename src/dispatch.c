@@ -34,6 +34,29 @@ float shl__zh_dir_f[SHL__ZH_NDIR][3];
 float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE];
 float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE];
 
+const shl__isa shl__isa_scalar = {
+    .name = "scalar",
+    .vlen = 1,
+    .poly_work_bytes = shl__poly_work_bytes_scalar,
+    .poly_batch = shl__poly_batch_scalar,
+};
+#ifdef SHL_HAVE_AVX2
+const shl__isa shl__isa_avx2 = {
+    .name = "avx2",
+    .vlen = 8,
+    .poly_work_bytes = shl__poly_work_bytes_avx2,
+    .poly_batch = shl__poly_batch_avx2,
+};
+#endif
+#ifdef SHL_HAVE_NEON
+const shl__isa shl__isa_neon = {
+    .name = "neon",
+    .vlen = 4,
+    .poly_work_bytes = shl__poly_work_bytes_neon,
+    .poly_batch = shl__poly_batch_neon,
+};
+#endif
+
 static pthread_once_t init_once = PTHREAD_ONCE_INIT;
 static int cpu_avx2; /* written once under init_once */
 

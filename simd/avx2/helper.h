@@ -6,7 +6,6 @@
 #include <stddef.h>
 
 #define SHL_VLEN 8
-#define SHL_ISA_NAME "avx2"
 #define SHL_ISA_SUFFIX(name) name##_avx2
 
 typedef __m256 vf;

@@ -6,7 +6,6 @@
 #include <stddef.h>
 
 #define SHL_VLEN 4
-#define SHL_ISA_NAME "neon"
 #define SHL_ISA_SUFFIX(name) name##_neon
 
 typedef float32x4_t vf;

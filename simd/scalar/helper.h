@@ -7,7 +7,6 @@
 #include <stddef.h>
 
 #define SHL_VLEN 1
-#define SHL_ISA_NAME "scalar"
 #define SHL_ISA_SUFFIX(name) name##_scalar
 
 typedef float vf;
