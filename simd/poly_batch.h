@@ -113,7 +113,8 @@ size_t ISA(shl__poly_work_bytes)(int lmax, int with_grad)
 #define GEO(w, v, f) ((w)->geo + ((size_t)(v) * NF + (f)) * VL)
 #define KV(w, l, k) vf_load((w)->kv + ((size_t)(l) * NK + (k)) * VL)
 
-/* Lanes of a block, in double: the scaled point, the plane test of
+/* Lanes of a block, in double: the scaled point (stored relative to v_0, as are P->v and
+ * P->proxy: a polygon far from the origin stays within float range), the plane test of
  * shl_polygon_f (polygon.c, shl__poly_geom_init; squared form), and h = normal . (v_0 - x).
  * Lanes past nvalid, in the plane, or farther than 2^40 extents from the polygon
  * (products of three distances must stay in float range) evaluate the proxy
@@ -137,11 +138,11 @@ static void lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, 
             h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
                 P->normal[2] * (P->vd[0][2] - x[2]);
             ok = h * h > tol * tol * rmax2 * P->len2 && rmin2 >= 0x1p-100 && rmax2 <= 0x1p80;
+            for (int k = 0; k < 3; ++k) x[k] -= P->vd[0][k]; /* relative to v_0, as P->v (float range) */
         }
         if (!ok) {
             memcpy(x, P->proxy, sizeof x);
-            h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
-                P->normal[2] * (P->vd[0][2] - x[2]);
+            h = -(P->normal[0] * x[0] + P->normal[1] * x[1] + P->normal[2] * x[2]);
         }
         for (int k = 0; k < 3; ++k) w->lane[k * VL + j] = (float)x[k];
         w->lane[3 * VL + j] = (float)h;
@@ -466,17 +467,23 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
         s_b[l] = (float)((2 * ld - 1) / (ld * (ld + 1) + (l == 0))); /* Eq. 29 weights */
         s_s[l] = (float)((ld - 2) * (ld - 1) / (ld * (ld + 1) + (l == 0)));
     }
+    /* inv_scale = gs0 gs1, both floats (up to 2^149 for a denormal extent); gs1 >= 1 is applied
+     * after the reconstruction, so a product overflows only if the final gradient does */
+    const float gs0 = (float)(P->inv_scale < 0x1p126 ? P->inv_scale : 0x1p126);
+    const float gs1 = (float)(P->inv_scale / gs0);
     for (int p0 = 0; p0 < npts; p0 += VL) {
         const int nvalid = npts - p0 < VL ? npts - p0 : VL;
         lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w);
         const vf omega = geometry(P, &w, with_grad);
         /* result = sign(S_0) * (input-order result); masked lanes get 0 */
         const vf fs = vf_mulsign(vf_load(w.lane + 4 * VL), omega);
-        const vf fsg = vf_mul(fs, vf_set1((float)P->inv_scale)); /* d/dx = inv_scale d/dx_scaled */
+        const vf fsg = vf_mul(fs, vf_set1(gs0)); /* d/dx = inv_scale d/dx_scaled = gs0 gs1 d/dx_scaled */
         lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad);
         for (int k = 1; k <= lmax; ++k) /* lobe pairs (2k-1, 2k), mirror images in y */
             lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad);
         reconstruct(&w, lmax, nq);
+        for (size_t r = nc; gs1 != 1.0f && r < (size_t)nq * nc; ++r)
+            vf_store(w.soa + r * VL, vf_mul(vf_load(w.soa + r * VL), vf_set1(gs1)));
         store_rows(w.soa, nc, coeffs + (size_t)p0 * nc, (size_t)nc, nvalid);
         if (with_grad) store_rows(w.soa + (size_t)nc * VL, 3 * nc, grad + (size_t)p0 * 3 * nc, 3 * (size_t)nc, nvalid);
     }

@@ -146,6 +146,7 @@ int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts,
     shl__poly_zh_grad_d(&g, ctx->lmax, zh, zh_grad);
     shl__zh_to_sh(ctx->lmax, zh, coeffs);
     for (int a = 0; a < 3; ++a) shl__zh_to_sh(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    shl__poly_grad_unscale(&g, grad, 3 * ctx->nc);
     return SHL_OK;
 }
 
@@ -163,6 +164,7 @@ int shl_polygon_grad_f(const shl_ctx *ctx, const float x[3], const float *verts,
     shl__poly_zh_grad_f(&g, ctx->lmax, zh, zh_grad);
     shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
     for (int a = 0; a < 3; ++a) shl__zh_to_sh_f(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    shl__poly_grad_unscale_f(&g, grad, 3 * ctx->nc);
     return SHL_OK;
 }
 

@@ -1,7 +1,10 @@
 /* Batched evaluation entry points: argument checks, the polygon prepared once
  * in double (scaled, repeated vertices dropped, plane and fan data), then the
- * context's SIMD kernel (simd/poly_batch.h) over all points. */
+ * context's SIMD kernel (simd/poly_batch.h) over all points, and the scalar path
+ * for the rare points its float geometry cannot resolve. */
 #include "../simd/batch.h"
+#include "polygon.h"
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -25,9 +28,10 @@ static void prepare(const float *verts, int n, shl__batch_poly *P)
     while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(float) * 3) == 0) --m;
     P->n = 0;
     if (m < 3) return;
-    double ext = 0.0; /* extent about v_0, > 0 since the vertices differ */
+    double ext = 0.0; /* extent about v_0 */
     for (int i = 1; i < m; ++i)
         for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs((double)kept[3 * i + k] - kept[k]));
+    if (!(ext > 0.0)) return; /* vertices equal up to the sign of zero: zero area */
     P->inv_scale = ldexp(1.0, -ilogb(ext)); /* extent in [1, 2) after scaling */
     for (int i = 0; i < m; ++i)
         for (int k = 0; k < 3; ++k) P->vd[i][k] = kept[3 * i + k] * P->inv_scale;
@@ -49,9 +53,9 @@ static void prepare(const float *verts, int n, shl__batch_poly *P)
     for (int i = 0; i < m; ++i) {
         const int f = i + 1 == m ? 0 : i + 1;
         for (int k = 0; k < 3; ++k) {
-            P->v[i][k] = (float)P->vd[i][k];
+            P->v[i][k] = (float)(P->vd[i][k] - P->vd[0][k]); /* relative to v_0: within float range */
             P->edge[i][k] = (float)(P->vd[f][k] - P->vd[i][k]);
-            centroid[k] += P->vd[i][k] / m;
+            centroid[k] += (P->vd[i][k] - P->vd[0][k]) / m; /* relative to v_0, as P->v */
         }
         P->fan[i] = 0.0f;
     }
@@ -64,6 +68,44 @@ static void prepare(const float *verts, int n, shl__batch_poly *P)
     }
     P->inv_len = (float)inv_len;
     P->n = m;
+}
+
+/* Points the all-float geometry cannot resolve: closer to the plane than 2^-16 of
+ * their distance to the farthest vertex (the side, hence the sign of the gradient's
+ * normal component, would be decided by float rounding), or within 2^-16 extents of
+ * a vertex (float cannot separate them from it).  Not those of the kernel's own
+ * cases: in the plane by the double test (zeros) or beyond 2^40 extents (zeros);
+ * cf. lanes_setup in simd/poly_batch.h.  Distances in the scaled units of P. */
+static int float_unresolved(const shl__batch_poly *P, const float *pt)
+{
+    double x[3], rmax2 = 0.0, rmin2 = HUGE_VAL;
+    for (int k = 0; k < 3; ++k) x[k] = pt[k] * P->inv_scale;
+    for (int i = 0; i < P->n; ++i) {
+        const double d[3] = {P->vd[i][0] - x[0], P->vd[i][1] - x[1], P->vd[i][2] - x[2]};
+        const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        rmax2 = fmax(rmax2, d2);
+        rmin2 = fmin(rmin2, d2);
+    }
+    const double h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
+                     P->normal[2] * (P->vd[0][2] - x[2]);
+    const double h2 = h * h, tol = 8.0 * DBL_EPSILON, band = 0x1p-32 * rmax2 * P->len2;
+    return rmax2 <= 0x1p80 && h2 > tol * tol * rmax2 * P->len2 && (h2 <= band || rmin2 < 0x1p-32);
+}
+
+/* Such a point takes the scalar path of shl_polygon_grad_f (geometry in double). */
+static void scalar_point(const shl_ctx *ctx, const float *verts, int n, const float *pt, float *coeffs, float *grad)
+{
+    double xd[3], vd[3 * SHL_MAX_VERTS];
+    float zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
+    for (int k = 0; k < 3; ++k) xd[k] = pt[k];
+    for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
+    shl__poly_geom g;
+    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_zh_grad_f(&g, ctx->lmax, zh, zh_grad); /* coefficients independent of the gradient request */
+    shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
+    if (!grad) return;
+    for (int a = 0; a < 3; ++a) shl__zh_to_sh_f(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    shl__poly_grad_unscale_f(&g, grad, 3 * ctx->nc);
 }
 
 int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
@@ -88,5 +130,8 @@ int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts,
     if (!work) return SHL_ENOMEM;
     ctx->isa->poly_batch(&P, ctx->lmax, npts, pts, coeffs, grad, work);
     shl__free(work);
+    for (int p = 0; p < npts; ++p)
+        if (float_unresolved(&P, pts + 3 * (size_t)p))
+            scalar_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
     return SHL_OK;
 }

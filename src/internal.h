@@ -3,6 +3,8 @@
 #define SHL_INTERNAL_H
 
 #include "shlight.h"
+#include <limits.h>
+#include <math.h>
 #include <stddef.h>
 
 #ifndef M_PI
@@ -35,5 +37,32 @@ void shl__sh_eval(int lmax, double x, double y, double z, double *out);
 /* Argument checks shared by the API entry points (api.c). */
 int shl__check_finite(const double *v, int count);
 int shl__check_finite_f(const float *v, int count);
+
+/* Geometry in scaled units (README, "Numerical contract"): differences of
+ * coordinates are multiplied by a power of two 2^-E that brings the largest near
+ * 1, so that no product of distances over- or underflows; results that are
+ * ratios of lengths are unchanged (bit for bit when the unscaled arithmetic
+ * does not over/underflow), and d/dx = 2^-E d/dx_scaled.
+ * ilogb(a - b), or INT_MIN when a == b; a - b may overflow: then both |a|, |b|
+ * exceed 2^969 and their halves are exact. */
+static inline int shl__ilogb_diff(double a, double b)
+{
+    const double d = a - b;
+    if (d == 0.0) return INT_MIN;
+    return isinf(d) ? ilogb(0.5 * a - 0.5 * b) + 1 : ilogb(d);
+}
+/* (a - b) 2^e, rounded once, as if the exponent range were unbounded (up to underflow). */
+static inline double shl__diff_scaled(double a, double b, int e)
+{
+    const double d = a - b;
+    return isinf(d) ? ldexp(0.5 * a - 0.5 * b, e + 1) : ldexp(d, e);
+}
+/* 2^e as a product s[0] s[1] of two doubles (|e| <= 2200): multiplying by both
+ * in turn rounds only where the final result underflows or overflows. */
+static inline void shl__pow2_split(int e, double s[2])
+{
+    s[0] = ldexp(1.0, e / 2);
+    s[1] = ldexp(1.0, e - e / 2);
+}
 
 #endif

@@ -17,9 +17,19 @@ static size_t acc_block(int lmax) { return (size_t)(2 * lmax) * SHL__ZH_STRIDE +
 
 size_t shl__lights_ws_size(int lmax) { return 4 * (size_t)SHL__ZH_BLOCK + 12 * acc_block(lmax); }
 
+/* normal . (x - v_0), the difference scaled by a power of two (internal.h): the
+ * sign of the unscaled formula wherever that does not over/underflow */
 static double front_distance(const shl__light *li, const double *v0, const double x[3])
 {
-    return li->normal[0] * (x[0] - v0[0]) + li->normal[1] * (x[1] - v0[1]) + li->normal[2] * (x[2] - v0[2]);
+    int e = INT_MIN;
+    for (int k = 0; k < 3; ++k) {
+        const int ek = shl__ilogb_diff(x[k], v0[k]);
+        e = ek > e ? ek : e;
+    }
+    if (e == INT_MIN) return 0.0; /* x = v_0: in the plane */
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) d += li->normal[k] * shl__diff_scaled(x[k], v0[k], -e);
+    return d;
 }
 
 /* Lobe integrals of a unit-radiance sphere seen from x, layout of shl__poly_zh_grad_d.
@@ -49,7 +59,7 @@ static void sphere_zh(const shl__light *li, int lmax, const double x[3], double 
     for (int l = 0; l <= lmax; ++l) {
         const double k = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
         kw[l] = k * w[l];
-        if (zh_grad) kdw[l] = k * dw[l] * g.k_alpha; /* -(d zh / d cos a)(d cos a / dx) . u */
+        if (zh_grad) kdw[l] = k * dw[l] * g.k_alpha_s; /* -(d zh / d cos a)(d cos a / dx) . u */
     }
     for (int d = 0; d < ndir; ++d) {
         const double *dir = shl__zh_dir[d];
@@ -65,13 +75,14 @@ static void sphere_zh(const shl__light *li, int lmax, const double x[3], double 
             }
             continue;
         }
-        const double tan_dir[3] = {(dir[0] - z * g.u[0]) * g.inv_d, (dir[1] - z * g.u[1]) * g.inv_d,
-                                   (dir[2] - z * g.u[2]) * g.inv_d}; /* -d z_d / dx */
+        const double tan_dir[3] = {(dir[0] - z * g.u[0]) * g.inv_d_s, (dir[1] - z * g.u[1]) * g.inv_d_s,
+                                   (dir[2] - z * g.u[2]) * g.inv_d_s}; /* -d z_d / dx, scaled units */
         double *og = zh_grad + d * SHL__ZH_STRIDE;
         for (int l = 0; l <= lmax; ++l) {
             out[l] = kw[l] * p;
             const double radial = kdw[l] * p, tang = kw[l] * dp;
-            for (int a = 0; a < 3; ++a) og[a * SHL__ZH_BLOCK + l] = -radial * g.u[a] - tang * tan_dir[a];
+            for (int a = 0; a < 3; ++a) /* back from scaled units (sh_ops.h) */
+                og[a * SHL__ZH_BLOCK + l] = (-radial * g.u[a] - tang * tan_dir[a]) * g.grad_scale[0] * g.grad_scale[1];
             const double p_next = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
             const double dp_next = dp_prev + (2.0 * l + 1.0) * p; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
             p_prev = p;
@@ -93,9 +104,12 @@ static int light_zh(const shl_lights *lights, const shl__light *li, int lmax, co
         if (!li->two_sided && !(front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
         shl__poly_geom g;
         shl__poly_geom_init(&g, x, v, li->n);
-        if (with_grad)
+        if (with_grad) {
             shl__poly_zh_grad_d(&g, lmax, zh, zh + SHL__ZH_BLOCK);
-        else
+            for (int a = 1; a <= 3; ++a) /* lobes d <= 2 lmax, bands l <= lmax of each block */
+                for (int d = 0; d <= 2 * lmax; ++d)
+                    shl__poly_grad_unscale(&g, zh + a * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE, lmax + 1);
+        } else
             shl__poly_zh_d(&g, lmax, zh);
         return 1;
     }
@@ -196,10 +210,19 @@ int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const
     li->n = n;
     li->vofs = lights->nverts;
     li->normal[0] = li->normal[1] = li->normal[2] = 0.0;
-    for (int i = 1; i + 1 < n; ++i) { /* Newell normal as a fan from v_0: exact for a triangle */
+    int ex = INT_MIN; /* the differences v_i - v_0 in scaled units (internal.h) */
+    for (int i = 1; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const int ek = shl__ilogb_diff(verts[3 * i + k], verts[k]);
+            ex = ek > ex ? ek : ex;
+        }
+    for (int i = 1; i + 1 < n && ex != INT_MIN; ++i) { /* Newell normal as a fan from v_0: exact for a triangle */
         const double *p = verts + 3 * i, *q = verts + 3 * (i + 1);
-        const double e[3] = {p[0] - verts[0], p[1] - verts[1], p[2] - verts[2]};
-        const double f[3] = {q[0] - verts[0], q[1] - verts[1], q[2] - verts[2]};
+        double e[3], f[3];
+        for (int k = 0; k < 3; ++k) {
+            e[k] = shl__diff_scaled(p[k], verts[k], -ex);
+            f[k] = shl__diff_scaled(q[k], verts[k], -ex);
+        }
         li->normal[0] += e[1] * f[2] - e[2] * f[1];
         li->normal[1] += e[2] * f[0] - e[0] * f[2];
         li->normal[2] += e[0] * f[1] - e[1] * f[0];

@@ -13,7 +13,7 @@ typedef struct {
     double rgb[3];     /* radiance per colour channel */
     int n;             /* polygon: vertex count */
     size_t vofs;       /* polygon: first coordinate in shl_lights.verts */
-    double normal[3];  /* polygon: Newell normal sum_i (v_i - v_0) x (v_i+1 - v_0) */
+    double normal[3];  /* polygon: Newell normal sum_i (v_i - v_0) x (v_i+1 - v_0), differences times 2^-E (internal.h) */
     double center[3];  /* sphere: centre */
     double radius;     /* sphere: radius, finite and > 0 */
 } shl__light;

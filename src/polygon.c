@@ -19,26 +19,44 @@ static inline void cross3(const double a[3], const double b[3], double out[3])
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-static inline void sub3(const double a[3], const double b[3], double out[3])
+static inline int imax(int a, int b) { return a > b ? a : b; }
+
+/* |v|, scaled by a power of two first: v . v may underflow when v is tiny (a cross
+ * product of a short edge: its length feeds gamma and mu, Wang 2018 Eq. 19-20) */
+static double norm3(const double v[3])
 {
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
+    const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    if (!(m > 0.0)) return 0.0;
+    const int e = ilogb(m);
+    const double s[3] = {ldexp(v[0], -e), ldexp(v[1], -e), ldexp(v[2], -e)};
+    return ldexp(sqrt(dot3(s, s)), e);
+}
+
+/* (a - b) 2^e per component (internal.h) */
+static inline void scaled_sub3(const double a[3], const double b[3], int e, double out[3])
+{
+    for (int k = 0; k < 3; ++k) out[k] = shl__diff_scaled(a[k], b[k], e);
 }
 
 /* Unit Newell normal of the polygon (counter-clockwise seen from its tip), from
- * vertex differences; 0 for a zero-area polygon. */
+ * the vertex differences v_i - v_0 scaled by a power of two that brings the
+ * largest near 1 (the cross products neither overflow nor underflow); 0 for a
+ * zero-area polygon (also vertices equal up to the sign of zero). */
 static int newell_normal(const double *verts, int n, double nrm[3])
 {
+    int e = INT_MIN;
+    for (int i = 1; i < n; ++i)
+        for (int k = 0; k < 3; ++k) e = imax(e, shl__ilogb_diff(verts[3 * i + k], verts[k]));
     nrm[0] = nrm[1] = nrm[2] = 0.0;
+    if (e == INT_MIN) return 0;
     for (int i = 1; i + 1 < n; ++i) {
         double e1[3], e2[3], c[3];
-        sub3(verts + 3 * i, verts, e1);
-        sub3(verts + 3 * (i + 1), verts, e2);
+        scaled_sub3(verts + 3 * i, verts, -e, e1);
+        scaled_sub3(verts + 3 * (i + 1), verts, -e, e2);
         cross3(e1, e2, c);
         for (int k = 0; k < 3; ++k) nrm[k] += c[k];
     }
-    const double len = sqrt(dot3(nrm, nrm));
+    const double len = norm3(nrm);
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) nrm[k] /= len;
     return 1;
@@ -55,20 +73,20 @@ static int newell_normal(const double *verts, int n, double nrm[3])
  *    in-plane offsets of the vertices from F and a = |h|, N and D divided by a are
  *    n.(e_i x e_j) and r_i r_j + a (r_i + r_j) + a^2 + e_i.e_j, and for e_i.e_j < 0
  *    r_i r_j + e_i.e_j = (a^4 + a^2 (|e_i|^2 + |e_j|^2) + |e_i x e_j|^2) / (r_i r_j - e_i.e_j). */
-static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n,
+static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n, int e,
                           const double nrm[3], double height)
 {
     double extent = 0.0, total = 0.0;
     for (int i = 1; i < n; ++i) {
         double d[3];
-        sub3(verts + 3 * i, verts, d);
+        scaled_sub3(verts + 3 * i, verts, e, d);
         extent = fmax(extent, sqrt(dot3(d, d)));
     }
     if (fabs(height) >= 2.0 * extent) {
         for (int i = 1; i + 1 < n; ++i) {
             double e1[3], e2[3], c[3];
-            sub3(verts + 3 * i, verts, e1);
-            sub3(verts + 3 * (i + 1), verts, e2);
+            scaled_sub3(verts + 3 * i, verts, e, e1);
+            scaled_sub3(verts + 3 * (i + 1), verts, e, e2);
             cross3(e1, e2, c);
             const double num = dot3(rel[0], c);
             const double den = dist[0] * dist[i] * dist[i + 1] + dot3(rel[0], rel[i]) * dist[i + 1] +
@@ -86,7 +104,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
             ei[k] = rel[i][k] - hi * nrm[k];
             ej[k] = rel[j][k] - hj * nrm[k];
         }
-        sub3(verts + 3 * j, verts + 3 * i, edge); /* e_i x e_j = e_i x (v_j - v_i) */
+        scaled_sub3(verts + 3 * j, verts + 3 * i, e, edge); /* e_i x e_j = e_i x (v_j - v_i) */
         cross3(ei, edge, c);
         const double num = dot3(nrm, c), dot = dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double pair = dot >= 0.0 ? ri * rj + dot
@@ -109,12 +127,21 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
     g->n = 0;
     g->solid_angle = 0.0;
+    g->grad_scale[0] = g->grad_scale[1] = 1.0;
     if (m < 3) return;
 
+    /* scaled units: v - x times 2^-ex, largest component in [1, 2) (internal.h) */
+    int ex = INT_MIN;
     for (int i = 0; i < m; ++i) {
-        sub3(kept + 3 * i, x, g->rel[i]);
-        g->dist[i] = sqrt(dot3(g->rel[i], g->rel[i]));
-        if (!(g->dist[i] > 0.0)) return; /* x on a vertex: in the plane */
+        int ei = INT_MIN;
+        for (int k = 0; k < 3; ++k) ei = imax(ei, shl__ilogb_diff(kept[3 * i + k], x[k]));
+        if (ei == INT_MIN) return; /* x on a vertex: in the plane */
+        ex = imax(ex, ei);
+    }
+    for (int i = 0; i < m; ++i) {
+        scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
+        g->dist[i] = norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
+        if (!(g->dist[i] > 0.0)) return; /* within 2^-1074 of the farthest vertex: on it, in the plane */
     }
     double nrm[3], rmax = 0.0;
     if (!newell_normal(kept, m, nrm)) return; /* zero-area polygon: sees nothing */
@@ -132,41 +159,48 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
                 kept[3 * j + k] = t;
             }
         for (int i = 0; i < m; ++i) {
-            sub3(kept + 3 * i, x, g->rel[i]);
-            g->dist[i] = sqrt(dot3(g->rel[i], g->rel[i]));
+            scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
+            g->dist[i] = norm3(g->rel[i]);
         }
     }
-    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, nrm, height);
+    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, -ex, nrm, height);
     g->n = m;
     g->solid_angle = omega;
+    shl__pow2_split(-ex, g->grad_scale); /* d/dx = 2^-ex d/dx_scaled */
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
     for (int e = 0; e < m; ++e) {
         const int f = (e + 1) % m;
         double edge[3], c[3];
-        sub3(kept + 3 * f, kept + 3 * e, edge); /* from the input vertices: exact for nearby ones */
+        scaled_sub3(kept + 3 * f, kept + 3 * e, -ex, edge); /* from the input vertices: exact for nearby ones */
         cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
-        const double clen = sqrt(dot3(c, c));
+        const double clen = norm3(c);
         /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
         g->gamma[e] = atan2(clen, dot3(g->rel[e], g->rel[f]));
         g->sin_gamma[e] = sin(g->gamma[e]);
         g->cos_gamma[e] = cos(g->gamma[e]);
         const double half = sin(0.5 * g->gamma[e]);
         g->omc_gamma[e] = 2.0 * half * half;
-        /* w_f - w_e = edge/r_f + rel_e (r_e - r_f)/(r_e r_f), r_e - r_f = -edge.(rel_e + rel_f)/(r_e + r_f) */
-        double sum[3];
-        for (int k = 0; k < 3; ++k) sum[k] = g->rel[e][k] + g->rel[f][k];
-        const double dr = -dot3(edge, sum) / (g->dist[e] + g->dist[f]);
-        for (int k = 0; k < 3; ++k)
-            g->dw[e][k] = edge[k] / g->dist[f] + g->rel[e][k] * (dr / (g->dist[e] * g->dist[f]));
+        /* w_f - w_e = edge/r_f + w_e (r_e - r_f)/r_f, r_e - r_f = -edge.(rel_e + rel_f)/(r_e + r_f):
+         * no cancellation for an edge short against the distances; for a longer one its terms
+         * can reach |edge| / min(r) (and overflow), while w_f - w_e itself is then accurate */
+        if (norm3(edge) <= fmin(g->dist[e], g->dist[f])) {
+            double sum[3];
+            for (int k = 0; k < 3; ++k) sum[k] = g->rel[e][k] + g->rel[f][k];
+            const double dr = -dot3(edge, sum) / (g->dist[e] + g->dist[f]);
+            for (int k = 0; k < 3; ++k) g->dw[e][k] = edge[k] / g->dist[f] + g->w[e][k] * (dr / g->dist[f]);
+        } else {
+            for (int k = 0; k < 3; ++k) g->dw[e][k] = g->w[f][k] - g->w[e][k];
+        }
         if (clen > 0.0) {
             for (int k = 0; k < 3; ++k) g->mu[e][k] = c[k] / clen;
             cross3(g->mu[e], g->w[e], g->lam[e]);
-            /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = edge x c / |c|^2 */
+            /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
+             * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
             double q[3], gxmu[3];
-            cross3(edge, c, q);
-            for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen / clen;
+            cross3(edge, g->mu[e], q);
+            for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen;
             cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
             g->fprime1[e] = dot3(g->w[f], gxmu);
             /* I_0 = g . int_0^gamma w(t) dt = g . (w_e sin(gamma) + lambda_e (1 - cos(gamma))) */

@@ -6,11 +6,12 @@
 
 /* A polygon as seen from the shading point x, oriented so that its solid
  * angle is positive (counter-clockwise seen from outside the unit sphere
- * around x).  Edge e joins vertex e and vertex (e+1) % n.  All in double. */
+ * around x).  Edge e joins vertex e and vertex (e+1) % n.  All in double, lengths
+ * in scaled units: v - x times 2^-E, the largest component in [1, 2) (internal.h). */
 typedef struct {
     int n;                         /* vertices after dropping repeated ones; 0: sees nothing */
-    double rel[SHL_MAX_VERTS][3];  /* v_e - x */
-    double dist[SHL_MAX_VERTS];    /* |v_e - x| */
+    double rel[SHL_MAX_VERTS][3];  /* (v_e - x) 2^-E */
+    double dist[SHL_MAX_VERTS];    /* |rel_e| */
     double w[SHL_MAX_VERTS][3];    /* omega_e, unit direction to vertex e */
     double lam[SHL_MAX_VERTS][3];  /* lambda_e = mu_e x omega_e (Wang 2018 Eq. 16) */
     double mu[SHL_MAX_VERTS][3];   /* mu_e, unit normal of the edge's great circle (Eq. 19) */
@@ -24,6 +25,7 @@ typedef struct {
     double gvec[SHL_MAX_VERTS][3];
     double fprime1[SHL_MAX_VERTS];   /* f'(gamma_e) */
     double f_integral[SHL_MAX_VERTS]; /* I_0 = int_0^gamma f dt = f'(0) - f'(gamma) */
+    double grad_scale[2];            /* product 2^-E: d/dx = 2^-E d/dx_scaled (shl__pow2_split) */
 } shl__poly_geom;
 
 /* Build the geometry; the caller has validated n and finiteness. */
@@ -31,7 +33,8 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
 
 /* ZH integrals zh[d * SHL__ZH_STRIDE + l] = int_Q Y_l0(dir_d . w) dw for
  * every lobe d < 2*lmax+1 of the shared lobe table and l <= lmax; the _grad
- * versions also write d zh / d x_a at zh_grad[a * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l]. */
+ * versions also write d zh / d x_a at zh_grad[a * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l],
+ * in scaled units: the caller multiplies by grad_scale (shl__poly_grad_unscale). */
 void shl__poly_zh_d(const shl__poly_geom *g, int lmax, double *zh);
 void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
@@ -42,6 +45,18 @@ void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh
 void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
 /* Float ZH in, float SH out; accumulates in double. */
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
+
+/* v[i] times grad_scale[0] grad_scale[1] = 2^-E, i < n: gradients from scaled
+ * units, in double, so that only a result beyond the range overflows (to +-inf,
+ * after the linear ZH -> SH reconstruction: no inf - inf). */
+static inline void shl__poly_grad_unscale(const shl__poly_geom *g, double *v, int n)
+{
+    for (int i = 0; i < n; ++i) v[i] = v[i] * g->grad_scale[0] * g->grad_scale[1];
+}
+static inline void shl__poly_grad_unscale_f(const shl__poly_geom *g, float *v, int n)
+{
+    for (int i = 0; i < n; ++i) v[i] = (float)(v[i] * g->grad_scale[0] * g->grad_scale[1]);
+}
 
 #define SHL__ZH_STRIDE (SHL_LMAX_MAX + 1)
 #define SHL__ZH_BLOCK ((2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE)

@@ -45,6 +45,10 @@ typedef struct {
     double t, s2, c;   /* 1 - cos a, sin^2 a, cos a                               */
     double k_alpha;    /* d cos a / dx = -k_alpha u                               */
     double inv_d;      /* 1 / |center - x|: d u / dx = -(I - u u^T) inv_d           */
+    /* the same in scaled units (internal.h): center - x times 2^-e, largest component
+     * in [1, 2); k_alpha = k_alpha_s 2^-e, inv_d = inv_d_s 2^-e (inf only if beyond DBL_MAX) */
+    double k_alpha_s, inv_d_s;
+    double grad_scale[2]; /* product 2^-e (shl__pow2_split) */
 } shl__sphere_geom;
 
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],

@@ -18,13 +18,18 @@
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius)
 {
-    const double v[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
-    const double big = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    int e = INT_MIN;
+    for (int k = 0; k < 3; ++k) {
+        const int ek = shl__ilogb_diff(center[k], x[k]);
+        e = ek > e ? ek : e;
+    }
     g->inside = 1;
-    if (!(big > 0.0)) return;
-    /* distances in units of big: no overflow or underflow in the norm */
-    const double vs[3] = {v[0] / big, v[1] / big, v[2] / big};
-    const double ds = sqrt(shl__dot3(vs, vs)), rs = radius / big;
+    if (e == INT_MIN) return; /* centre at x */
+    /* scaled units (internal.h): center - x times 2^-e, largest component in [1, 2);
+     * no overflow in the difference, no overflow or underflow in the norm */
+    const double vs[3] = {shl__diff_scaled(center[0], x[0], -e), shl__diff_scaled(center[1], x[1], -e),
+                          shl__diff_scaled(center[2], x[2], -e)};
+    const double ds = sqrt(shl__dot3(vs, vs)), rs = ldexp(radius, -e);
     if (ds <= rs) return;
     g->inside = 0;
     for (int k = 0; k < 3; ++k) g->u[k] = vs[k] / ds;
@@ -32,8 +37,11 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     g->s2 = s * s;
     g->c = sqrt((ds - rs) * (ds + rs)) / ds;           /* cos a, exact difference ds - rs */
     g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
-    g->inv_d = 1.0 / (big * ds);
-    g->k_alpha = g->s2 / g->c * g->inv_d;              /* d cos a / dd = sin^2 a / (d cos a) */
+    g->inv_d_s = 1.0 / ds;
+    g->k_alpha_s = g->s2 / g->c * g->inv_d_s;          /* d cos a / dd = sin^2 a / (d cos a) */
+    shl__pow2_split(-e, g->grad_scale);                /* d/dx = 2^-e d/dx_scaled */
+    g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
+    g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
 }
 
 static int check_radius(double radius)

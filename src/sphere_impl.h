@@ -107,8 +107,9 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
         for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
             if (grad) {
                 /* d/dx [w_l(cos a) Y(u)] = w_l' (d cos a/dx) Y - (w_l / d) (I - u u^T) grad Y */
-                const REAL radial = (REAL)g->k_alpha * dw[l] * coeffs[k], tang = w[l] * (REAL)g->inv_d;
-                for (int a = 0; a < 3; ++a) grad[a * nc + k] = -radial * u[a] - tang * grad[a * nc + k];
+                const REAL radial = (REAL)g->k_alpha_s * dw[l] * coeffs[k], tang = w[l] * (REAL)g->inv_d_s;
+                for (int a = 0; a < 3; ++a) /* back from scaled units in double (sh_ops.h) */
+                    grad[a * nc + k] = (REAL)((-radial * u[a] - tang * grad[a * nc + k]) * g->grad_scale[0] * g->grad_scale[1]);
             }
             coeffs[k] *= w[l]; /* HVL Eq. (15): sqrt(4 pi/(2l+1)) zh_l Y_lm(axis) = w_l Y_lm(axis) */
         }

@@ -9,6 +9,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 enum { NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
 
@@ -85,8 +86,8 @@ SHL_TEST(polygon_float_vs_reference)
         for (int k = 0; k < 3 * n; ++k) vf[k] = (float)verts[k];
         for (int k = 0; k < 3; ++k) xf[k] = (float)x[k];
         /* compare against the reference for the float-rounded geometry */
-        for (int k = 0; k < 3 * n; ++k) verts[k] = vf[k];
-        for (int k = 0; k < 3; ++k) x[k] = xf[k];
+        for (int k = 0; k < 3 * n; ++k) verts[k] = round_to_float(verts[k]);
+        for (int k = 0; k < 3; ++k) x[k] = round_to_float(x[k]);
         CHECK(shl_polygon_solid_angle(x, verts, n, &omega) == SHL_OK);
         if (omega < 0.05 * 0.05) continue; /* spec: polygons subtending more than 0.05 rad */
         CHECK(shl_polygon_f(ctx, xf, vf, n, got) == SHL_OK);
@@ -365,4 +366,98 @@ SHL_TEST(polygon_bad_input)
     CHECK(shl_polygon(ctx, x, big, SHL_MAX_VERTS, c) == SHL_OK && all_finite(c, 25));
     shl_ctx_destroy(ctx);
     shl_ctx_destroy(NULL);
+}
+
+/* Coordinates far outside 2^+-250 (issue 8, K1).  Multiplying every input by 2^k
+ * is exact for these small dyadic coordinates, and the library works in units of
+ * a power of two (src/internal.h), so the coefficients and the solid angle at
+ * scale 2^k must equal those at scale 1 bit for bit (checked against the
+ * quadrature reference above), and each gradient must be 2^-k times the scale-1
+ * one, rounded once: ldexp(g_1, -k), +-inf where that exceeds DBL_MAX (k = -1070),
+ * never NaN.  k = 1023 makes v - x overflow (components +-2^1023). */
+static int scaled_mismatches(const shl_ctx *ctx, int k, const double x1[3], const double *v1, int n, int use_float)
+{
+    const int nc = SHL_NCOEFFS(shl_ctx_lmax(ctx));
+    static double c1[NCMAX], g1[3 * NCMAX], ck[NCMAX], gk[3 * NCMAX], c0[NCMAX];
+    static float f1[NCMAX], h1[3 * NCMAX], fk[NCMAX], hk[3 * NCMAX];
+    double x[3], v[3 * SHL_MAX_VERTS], o1, ok;
+    float xf1[3], vf1[3 * SHL_MAX_VERTS], xf[3], vf[3 * SHL_MAX_VERTS];
+    for (int i = 0; i < 3; ++i) xf[i] = (float)(x[i] = ldexp(x1[i], k)), xf1[i] = (float)x1[i];
+    for (int i = 0; i < 3 * n; ++i) vf[i] = (float)(v[i] = ldexp(v1[i], k)), vf1[i] = (float)v1[i];
+    int bad = 0;
+    if (use_float) {
+        CHECK(shl_polygon_grad_f(ctx, xf1, vf1, n, f1, h1) == SHL_OK && shl_polygon_grad_f(ctx, xf, vf, n, fk, hk) == SHL_OK);
+        bad += memcmp(f1, fk, sizeof(float) * nc) != 0;
+        for (int i = 0; i < 3 * nc; ++i) bad += hk[i] != (float)ldexp(h1[i], -k);
+        return bad;
+    }
+    CHECK(shl_polygon_grad(ctx, x1, v1, n, c1, g1) == SHL_OK && shl_polygon_grad(ctx, x, v, n, ck, gk) == SHL_OK);
+    CHECK(shl_polygon(ctx, x, v, n, c0) == SHL_OK);
+    CHECK(shl_polygon_solid_angle(x1, v1, n, &o1) == SHL_OK && shl_polygon_solid_angle(x, v, n, &ok) == SHL_OK);
+    bad += memcmp(c1, ck, sizeof(double) * nc) != 0 || memcmp(c0, ck, sizeof(double) * nc) != 0 || o1 != ok || !(o1 > 0.0);
+    for (int i = 0; i < 3 * nc; ++i) bad += !(gk[i] == ldexp(g1[i], -k));
+    return bad;
+}
+
+SHL_TEST(hard_extreme_scales)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK);
+    const double quad[12] = {1, 0, 2, 3, 1, 2, 2, 3, 2, 0, 2, 2}, x[3] = {0.5, 0.25, -1};
+    const double tri[9] = {0, 0, 1, 1.5, 0, 1, 0, 1.5, 1}; /* z = +-2^1023 at k = 1023: v - x overflows */
+    const int ks[] = {-1070, -1000, -600, -300, 300, 600, 1000};
+    int bad = 0;
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i) bad += scaled_mismatches(ctx, ks[i], x, quad, 4, 0);
+    bad += scaled_mismatches(ctx, 1023, x, tri, 3, 0);
+    const int kf[] = {-120, -64, 64, 100}; /* float inputs: within float range */
+    for (size_t i = 0; i < sizeof kf / sizeof kf[0]; ++i) bad += scaled_mismatches(ctx, kf[i], x, quad, 4, 1);
+    CHECK(bad == 0);
+    /* a polygon 2^-515 of its distance across: its arcs' squares underflow (the norm of
+     * rel x edge was imprecise to 1e-9, gamma with it); its solid angle (~1e-314) is
+     * below every band's noise, so |L_lm| <= K_l 300 eps P (the fuzz targets' slack,
+     * P the angular perimeter, long double): was 3.4e4 eps P at l = 4 */
+    const double small[9] = {0x1.cp-16, 0x1p-15, 0x1p-11, -0x1.4p-16, -0x1.cp-16, -0x1.cp-12, 0x1p-15, 0x1p-15, 0x1p-11};
+    const double xf[3] = {-0x1.7dap+6, 0x1.000000000002ep+0, 0x1.2f0cb84de11fap+504};
+    double c[NCMAX];
+    long double perim = 0.0L, worst = 0.0L;
+    CHECK(shl_polygon(ctx, xf, small, 3, c) == SHL_OK);
+    for (int e = 0; e < 3; ++e) {
+        long double a[3], b[3], d = 0.0L;
+        for (int k = 0; k < 3; ++k) {
+            a[k] = (long double)small[3 * e + k] - xf[k];
+            b[k] = (long double)small[3 * ((e + 1) % 3) + k] - xf[k];
+            d += a[k] * b[k];
+        }
+        const long double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+        perim += atan2l(sqrtl(cx * cx + cy * cy + cz * cz), d);
+    }
+    for (int l = 1; l <= SHL_LMAX_MAX; ++l)
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k)
+            worst = fmaxl(worst, fabsl(c[k]) / (sqrtl((2.0L * l + 1.0L) / (4.0L * M_PI)) * DBL_EPSILON * perim));
+    CHECK(worst <= 300.0L);
+    /* a vertex 1e-291 from x, the others ~1: |rel|^2 underflows (was a zero distance, NaN);
+     * planar: x is in the plane (zeros); the fuzzer's non-planar quad: finite */
+    const double near_v[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, xv[3] = {0x1p-966, 0x1p-967, 0x1p-968};
+    const double raw[12] = {0, 0, 1, 1, 0, 1.5, 1, 1, 1, 0, -9.7771978033378898e-292, 0x1p-1074}, o3[3] = {0, 0, 0};
+    CHECK(shl_polygon(ctx, xv, near_v, 4, c) == SHL_OK);
+    for (int k = 0; k < NCMAX; ++k) CHECK(c[k] == 0.0);
+    CHECK(shl_polygon(ctx, o3, raw, 4, c) == SHL_OK && all_finite(c, NCMAX));
+    /* the fuzzer's: vertex distances from 1e-297 to 1e300 -- omega_f - omega_e of an edge long
+     * against the distances is taken directly, of a short one without r_e r_f (both overflowed
+     * or underflowed: NaN) */
+    const double wild[21] = {-3.6020680465678208e+46, -408.125, -1e300, -1e300, -1e300, -1e300,
+                             -1e300, -0x1p-1022, -504.859375, -3.4394531249979998, 0, 1,
+                             0, 1.914612587394872e+265, -477.859375, -477.859375, -477.859375, -477.859375,
+                             -105.859375, -477.859375, -477.859375};
+    const double xw[3] = {-479.71875, -477.859375, -477.859375}, xw2[3] = {-955.71875, -477.859375, -477.859375};
+    double gw[3 * NCMAX];
+    CHECK(shl_polygon_grad(ctx, xw, wild, 6, c, gw) == SHL_OK && all_finite(c, NCMAX));
+    CHECK(shl_polygon_grad(ctx, xw2, wild, 7, c, gw) == SHL_OK && all_finite(c, NCMAX));
+    /* x 2e-308 from vertex 4, the farthest 1e300 away: the scaled offset underflows to 0 (was a
+     * zero distance, NaN): x is on that vertex, in the plane */
+    const double xw3[3] = {-0x1p-1022, 1.914612587394872e+265, -477.859375};
+    CHECK(shl_polygon_grad(ctx, xw3, wild, 7, c, gw) == SHL_OK && all_finite(c, NCMAX) && c[0] == 0.0);
+    harness_note("2^-1070..2^1023 (double), 2^-120..2^100 (float): %d values differ from the scaled scale-1 result; "
+                 "2^-515 polygon: max |L_lm| / (K_l eps P) %.2Lg (bound 300)", bad, worst);
+    shl_ctx_destroy(ctx);
 }

@@ -211,10 +211,10 @@ SHL_TEST(sphere_float_random)
         for (int k = 0; k < 3; ++k) {
             xf[k] = (float)x[k];
             cf[k] = (float)c[k];
-            x[k] = xf[k];
-            c[k] = cf[k];
+            x[k] = round_to_float(x[k]);
+            c[k] = round_to_float(c[k]);
         }
-        rad = (float)rad;
+        rad = round_to_float(rad);
         CHECK(shl_sphere_f(ctx, xf, cf, (float)rad, gf) == SHL_OK);
         capref_sphere(L, x, c, rad, want);
         for (int k = 0; k < NC; ++k) got[k] = gf[k];
@@ -383,5 +383,52 @@ SHL_TEST(sphere_bad_input)
     CHECK(guard_intact(zh, 32));
     CHECK(shl_zh_cap(3, M_PI, zh) == SHL_OK && zh[4] == GUARD_VALUE);
     CHECK_NEAR(zh[0], 2.0 * sqrt(M_PI), 1e-15); /* the whole sphere */
+    shl_ctx_destroy(ctx);
+}
+
+/* Extreme scales (issue 8, K4): every input times 2^k is exact here and the
+ * geometry works in units of a power of two (src/internal.h), so coefficients
+ * equal the scale-1 ones bit for bit and each gradient is ldexp(g_1, -k) (one
+ * rounding; +-inf only where that exceeds DBL_MAX).  Cases: centre - x overflows
+ * (components +-2^1023); a denormal distance 2^-1050 with radius 2^-1070, whose
+ * gradient (~2^1010) is representable although 1/d is not; tiny and huge scales. */
+static int sphere_scaled_mismatches(const shl_ctx *ctx, int k, const double x1[3], const double c1[3], double r1,
+                                    int use_float)
+{
+    static double a[NC], ga[3 * NC], b[NC], gb[3 * NC];
+    static float af[NC], gaf[3 * NC], bf[NC], gbf[3 * NC];
+    double x[3], c[3];
+    float x1f[3], c1f[3], xf[3], cf[3];
+    for (int i = 0; i < 3; ++i) {
+        xf[i] = (float)(x[i] = ldexp(x1[i], k)), cf[i] = (float)(c[i] = ldexp(c1[i], k));
+        x1f[i] = (float)x1[i], c1f[i] = (float)c1[i];
+    }
+    const double r = ldexp(r1, k);
+    int bad = 0;
+    if (use_float) {
+        CHECK(shl_sphere_grad_f(ctx, x1f, c1f, (float)r1, af, gaf) == SHL_OK);
+        CHECK(shl_sphere_grad_f(ctx, xf, cf, (float)r, bf, gbf) == SHL_OK);
+        for (int i = 0; i < NC; ++i) bad += af[i] != bf[i];
+        for (int i = 0; i < 3 * NC; ++i) bad += gbf[i] != (float)ldexp(gaf[i], -k);
+        return bad;
+    }
+    CHECK(shl_sphere_grad(ctx, x1, c1, r1, a, ga) == SHL_OK && shl_sphere_grad(ctx, x, c, r, b, gb) == SHL_OK);
+    for (int i = 0; i < NC; ++i) bad += a[i] != b[i];
+    for (int i = 0; i < 3 * NC; ++i) bad += !(gb[i] == ldexp(ga[i], -k));
+    return bad + !(a[0] > 0.0 && a[0] < sqrt(4.0 * M_PI)); /* outside the sphere */
+}
+
+SHL_TEST(sphere_extreme_scales)
+{
+    shl_ctx *ctx = ctx_or_die(L);
+    const double x[3] = {-1, 0.25, -0.5}, c[3] = {1, -0.5, 0.75}, o[3] = {0, 0, 0}, cd[3] = {1, 0.5, 0.25};
+    int bad = 0;
+    const int ks[] = {-1060, -1000, -500, 500, 1000, 1023};
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i) bad += sphere_scaled_mismatches(ctx, ks[i], x, c, 0.5, 0);
+    bad += sphere_scaled_mismatches(ctx, -1050, o, cd, 0x1p-20, 0); /* |c - x| ~ 2^-1050, r = 2^-1070 */
+    const int kf[] = {-120, -60, 60, 100};
+    for (size_t i = 0; i < sizeof kf / sizeof kf[0]; ++i) bad += sphere_scaled_mismatches(ctx, kf[i], x, c, 0.5, 1);
+    CHECK(bad == 0);
+    harness_note("2^-1060..2^1023 (double), 2^-120..2^100 (float): %d values differ from the scaled scale-1 result", bad);
     shl_ctx_destroy(ctx);
 }

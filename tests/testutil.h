@@ -54,6 +54,14 @@ static inline int guard_intact(const double *buf, int n)
     return 1;
 }
 
+/* v rounded to float, through a volatile: GCC 12.2 -O2 turns a short loop of double ->
+ * float -> double round trips into copies (tests/fuzz/crashes/gcc12-slp-float-roundtrip.c). */
+static inline double round_to_float(double v)
+{
+    volatile float f = (float)v;
+    return f;
+}
+
 static inline int all_finite(const double *v, int n)
 {
     for (int i = 0; i < n; ++i)

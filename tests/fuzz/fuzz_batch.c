@@ -17,7 +17,10 @@
  *    i.e. fuzz_polygon_f's float slack with the conditioning term in float (the
  *    batch sets up its geometry in float; test_simd.c's hard-case term), and the
  *    gradient within K_l (2e-4 G + 64 (l+1) eps_f G + 8 eps_f S G2);
- *    a point farther than 2^40 extents from every vertex may get zeros (documented). */
+ *    a point farther than 2^40 extents from every vertex may get zeros (documented);
+ *  - a point the float geometry cannot resolve (height below 2^-16 of its distance
+ *    to the farthest vertex, or within 2^-16 extents of a vertex) gets the results
+ *    of shl_polygon_grad_f bit for bit (documented). */
 #include "fuzz_common.h"
 
 enum { MAXPTS = 17 };
@@ -32,42 +35,6 @@ static const shl_ctx *batch_ctx(int scalar, int lmax)
         if (st != SHL_OK) abort();
     }
     return ctx_isa[scalar][lmax];
-}
-
-/* K3 (src/batch.c, prepare): vertices that differ only in the sign of zero survive
- * the memcmp-based removal of repeats, the extent about v_0 is then 0 and
- * ldexp(1.0, -ilogb(0.0)) negates INT_MIN (undefined behaviour, UBSan aborts).
- * True when at least 3 vertices remain after that removal and all coincide. */
-static int k3_zero_extent(const float *v, int n)
-{
-    float kept[3 * SHL_MAX_VERTS];
-    int m = 0;
-    for (int i = 0; i < n; ++i) {
-        if (m > 0 && memcmp(v + 3 * i, kept + 3 * (m - 1), sizeof(float) * 3) == 0) continue;
-        memcpy(kept + 3 * m++, v + 3 * i, sizeof(float) * 3);
-    }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(float) * 3) == 0) --m;
-    if (m < 3) return 0;
-    for (int i = 1; i < m; ++i)
-        for (int k = 0; k < 3; ++k)
-            if (kept[3 * i + k] != kept[k]) return 0;
-    return 1;
-}
-
-/* B3 (src/batch.c / simd/poly_batch.h): the all-float geometry is the input scaled by
- * 2^-ilogb(extent); when a coordinate (a vertex's or a point's) exceeds ~2^128 extents --
- * an extent in float's denormal range (seen: 1.8e-40 at distance 1), or a 1e-19 polygon at
- * z = -9e36 -- the scaled value overflows float before the documented "farther than 2^40
- * extents: zeros" rule applies, and coefficients or gradients come out NaN.  True when
- * the extent is below 2^-100 or any coordinate beyond 2^100 extents. */
-static int b3_scale_out_of_range(const float *v, int n, const float *pts, int npts)
-{
-    double ext = 0.0, big = 0.0;
-    for (int i = 1; i < n; ++i)
-        for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs((double)v[3 * i + k] - v[k]));
-    for (int i = 0; i < 3 * n; ++i) big = fmax(big, fabs((double)v[i]));
-    for (int i = 0; i < 3 * npts; ++i) big = fmax(big, fabs((double)pts[i]));
-    return ext < 0x1p-100 || big > ldexp(ext, 100);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -111,7 +78,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     else if (npts < 0) want = SHL_EDOMAIN;
     else if (nonfinite) want = SHL_ENONFINITE;
 
-    if (fz_known_issues_skipped() && want == SHL_OK && npts > 0 && k3_zero_extent(vf, P.n)) goto done; /* K3 */
     shl__alloc_fail_after = fail_after;
     const int st = shl_polygon_batch_f(ctx, vv, P.n, npts, pp, null_out ? NULL : c, with_grad ? g : NULL);
     shl__alloc_fail_after = -1;
@@ -125,7 +91,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FUZZ_CHECK(fz_untouched(c, cbytes) && fz_untouched(g, gbytes), "output written for npts = 0");
         goto done;
     }
-    if (fz_known_issues_skipped() && b3_scale_out_of_range(vf, P.n, pts, npts)) goto done; /* B3 */
     FUZZ_CHECK(all_finite_f(c, nc * npts), "non-finite batch coefficient");
     { /* lane independence and coefficients independent of the gradient request */
         const int p = fz_u8(&in) % npts;
@@ -171,10 +136,21 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         int zeros = 1;
         for (int k = 0; k < nc; ++k) zeros &= cp[k] == 0.0f;
         if (zeros && dmin > ldexpl(ext, 39)) continue;
-        /* B2 (reported): within ~2^-20 extents of a vertex the all-float geometry cannot
-         * separate the point from the vertex; results are then unbounded (seen: 2.4e11
-         * where |L_lm| <= K_l 2 pi) */
-        if (fz_known_issues_skipped() && dmin < ldexpl(ext, -20)) continue;
+        /* documented: a point the float geometry cannot resolve -- height below 2^-16 of
+         * its distance to the farthest vertex, or within 2^-16 extents of a vertex (here
+         * with a factor 2 margin), in front of the plane test and the 2^40-extents rule --
+         * takes the scalar path: shl_polygon_grad_f's results, bit for bit */
+        if (dmin < ldexpl(ext, 38) && G.height > ldexpl(G.rmax, -40) &&
+            (G.height <= ldexpl(G.rmax, -17) || dmin < ldexpl(ext, -17))) {
+            float *cf = fz_guarded(sizeof(float) * nc), *gf = fz_guarded(sizeof(float) * 3 * nc);
+            FUZZ_CHECK(shl_polygon_grad_f(ctx, pts + 3 * p, vf, P.n, cf, gf) == SHL_OK, "scalar float path");
+            FUZZ_CHECK(memcmp(cp, cf, sizeof(float) * nc) == 0, "point %d: unresolved point differs from shl_polygon_grad_f", p);
+            if (with_grad)
+                FUZZ_CHECK(memcmp(gp, gf, sizeof(float) * 3 * nc) == 0,
+                           "point %d: unresolved point's gradient differs from shl_polygon_grad_f", p);
+            free(cf);
+            free(gf);
+        }
 
         const long double A = G.omega, epsd = DBL_EPSILON, epsf = FLT_EPSILON;
         const long double condf = 8.0L * epsf * G.scale * G.gsum, gcondf = 8.0L * epsf * G.scale * G.g2sum;
@@ -194,11 +170,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 FUZZ_CHECK(fabsl((long double)cp[k] - cd[k]) <= sf + sd,
                            "point %d: L[%d] batch %.9g vs double %.17g (slack %.3Lg, K_l Omega %.3Lg)", p, k, cp[k], cd[k],
                            sf + sd, kl * A);
-                /* a point closer to the plane than the float resolution of the polygon's
-                 * coordinates is on an undetermined side of it in the all-float geometry: its
-                 * gradient (~ d|height|/dx) has an undetermined sign (reported, B1) */
-                const int float_plane = fz_known_issues_skipped() && G.height <= 16.0L * epsf * G.scale;
-                for (int a = 0; with_grad && !float_plane && a < 3; ++a) {
+                for (int a = 0; with_grad && a < 3; ++a) {
                     const float ga = gp[a * nc + k];
                     if (!isfinite(ga)) continue;
                     FUZZ_CHECK(fabsl((long double)ga - gd[a * nc + k]) <= gs,

@@ -459,35 +459,6 @@ static inline int fz_poly_geom(const fz_poly *P, const double xw[3], fz_geom *G)
     return 1;
 }
 
-/* ---- known, reported library limitations ----------------------------------- *
- * Inputs that hit a limitation already reported (tests/fuzz/README.md, "Known
- * issues") skip the value checks -- status codes, untouched outputs on error and
- * the sanitizers still apply -- so that a run keeps exploring past them.
- * FZ_STRICT=1 in the environment checks them too (make fuzz-repro sets it). */
-static int fz_strict = -1;
-static inline int fz_known_issues_skipped(void)
-{
-    if (fz_strict < 0) fz_strict = getenv("FZ_STRICT") != NULL;
-    return !fz_strict;
-}
-
-/* K1 (src/polygon.c, shl__poly_geom_init): the double polygon geometry squares
- * the Newell normal (|normal| ~ extent^2, its square ~ extent^4) and multiplies
- * three distances, so it over/underflows outside about 2^+-250: an extent below
- * ~2^-268 or a distance above ~2^255 gives zeros, pi or NaN instead of the
- * (scale-invariant) solid angle.  Range taken here: max |v_i - x| <= 2^240 and
- * polygon extent (max |v_i - v_0| over coordinates) >= 2^-240. */
-static inline int fz_k1_poly_out_of_range(const double *v, int n, const double x[3])
-{
-    double rmax = 0.0, ext = 0.0;
-    for (int i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-            rmax = fmax(rmax, fabs(v[3 * i + k] - x[k]));
-            ext = fmax(ext, fabs(v[3 * i + k] - v[k]));
-        }
-    return !(rmax <= 0x1p240 && ext >= 0x1p-240);
-}
-
 /* FZ_VERBOSE=1 in the environment: print the decoded input (replaying a crash). */
 static int fz_verbose = -1;
 static inline int fz_is_verbose(void)

@@ -44,7 +44,6 @@ static void check_polygon(const fz_poly *P, const double x[3], int lmax, const s
                    "output written on error %d", want);
         goto done;
     }
-    if (fz_known_issues_skipped() && fz_k1_poly_out_of_range(P->v, P->n, x)) goto done; /* K1 */
     FUZZ_CHECK(all_finite_d(c, nc), "non-finite coefficient, lmax %d", lmax);
     FUZZ_CHECK(all_finite_d(c2, nc), "non-finite coefficient (grad call), lmax %d", lmax);
     FUZZ_CHECK(isfinite(*omega) && *omega >= 0.0, "omega %g", *omega);
