@@ -20,17 +20,19 @@ ifeq ($(SANITIZE),thread)
 endif
 LDLIBS   += -lm -lpthread
 
-# SIMD batch kernels (simd/): the kernel text simd/poly_batch.h compiled once per ISA.
+# SIMD batch kernels (simd/): the kernel texts simd/poly_batch.h and simd/sphere_batch.h
+# compiled once per ISA, simd/interp_batch.h once per vector ISA (the scalar table
+# interpolates with the reference, src/interp_kernel.h).
 # Only the AVX2 object gets -mavx2 -mfma; src/dispatch.c picks a kernel at run time.
 SHL_ARCH := $(shell $(CC) -dumpmachine)
-SIMD_SRC := simd/scalar/poly_batch_scalar.c
+SIMD_SRC := simd/scalar/poly_batch_scalar.c simd/scalar/sphere_batch_scalar.c
 SIMD_DEFS :=
 ifneq ($(filter x86_64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/avx2/poly_batch_avx2.c
+  SIMD_SRC  += simd/avx2/poly_batch_avx2.c simd/avx2/sphere_batch_avx2.c simd/avx2/interp_batch_avx2.c
   SIMD_DEFS += -DSHL_HAVE_AVX2
 endif
 ifneq ($(filter aarch64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/neon/poly_batch_neon.c
+  SIMD_SRC  += simd/neon/poly_batch_neon.c simd/neon/sphere_batch_neon.c simd/neon/interp_batch_neon.c
   SIMD_DEFS += -DSHL_HAVE_NEON
 endif
 
@@ -50,16 +52,17 @@ SHARED   := $(BUILD)/libshlight.so
 .PHONY: all test test-valgrind test-neon demo bench install lobes clean
 all: $(STATIC) $(SHARED)
 
-$(BUILD)/%.o: %.c $(wildcard include/*.h src/*.h)
+# Every object depends on every header (simple and safe for a tree this size).
+HDRS     := $(wildcard include/*.h src/*.h simd/*.h simd/*/*.h)
+
+$(BUILD)/%.o: %.c $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -c $< -o $@
 
-$(BUILD)/thooks/%.o: %.c $(wildcard include/*.h src/*.h)
+$(BUILD)/thooks/%.o: %.c $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -DSHL_ALLOC_HOOKS -c $< -o $@
 
-SIMD_DEP_OBJ := $(foreach d,$(BUILD) $(BUILD)/thooks,$(SIMD_SRC:%.c=$(d)/%.o) $(d)/src/batch.o $(d)/src/dispatch.o)
-$(SIMD_DEP_OBJ) $(BUILD)/tests/test_simd.o: $(wildcard simd/*.h simd/*/*.h)
 $(BUILD)/simd/avx2/%.o $(BUILD)/thooks/simd/avx2/%.o: CFLAGS_ALL += -mavx2 -mfma
 $(BUILD)/src/dispatch.o $(BUILD)/thooks/src/dispatch.o: CFLAGS_ALL += $(SIMD_DEFS) \
   -DSHL_BUILD_CFLAGS="\"$(strip $(CSTD) $(OPT) $(CFLAGS) $(if $(filter-out 0,$(SANITIZE)),SANITIZE=$(SANITIZE)))\""
@@ -74,7 +77,7 @@ $(SHARED): $(LIB_OBJ)
 $(BUILD)/tests/run_tests: $(TEST_OBJ) $(TLIB_OBJ)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h include/*.h src/*.h)
+$(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h) $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Itests -c $< -o $@
 
@@ -101,7 +104,7 @@ test-neon:
 # accuracy sweeps, whose time goes into the tests' own quadrature references,
 # run natively and under ASan only (the full suite under valgrind exceeds CI's budget),
 # as do tests whose references use long double (valgrind computes it in double).
-VALGRIND_TESTS ?= basis_bad,basis_prefix,basis_closed,polygon_bad,polygon_prefix,polygon_grad_in_plane,polygon_grad_lobe,polygon_grad_short,hard_point,hard_tiny,hard_edge,hard_lmax,hard_repeated,lights,grid,sphere_bad,sphere_prefix,rotate_bad,rotate_about,rotate_zh,convolve_bad,convolve_clamped,convolve_app_b,brdf_eval,brdf_table_bad,brdf_table_diffuse,hvl_shade_bad,hvl_radius,simd,threads,zh_lobes_structure,render
+VALGRIND_TESTS ?= basis_bad,basis_prefix,basis_closed,polygon_bad,polygon_prefix,polygon_grad_in_plane,polygon_grad_lobe,polygon_grad_short,hard_point,hard_tiny,hard_edge,hard_lmax,hard_repeated,hard_extreme,lights,grid,sphere_bad,sphere_prefix,sphere_extreme,rotate_bad,rotate_about,rotate_zh,convolve_bad,convolve_clamped,convolve_app_b,brdf_eval,brdf_table_bad,brdf_table_diffuse,hvl_shade_bad,hvl_radius,simd,threads,zh_lobes_structure,render
 test-valgrind: $(BUILD)/tests/run_tests
 	valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect \
 	  $(BUILD)/tests/run_tests $(VALGRIND_TESTS)
@@ -188,13 +191,13 @@ $(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/fuzz_common.h $(LIB_OBJ)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -fsanitize=fuzzer -Itests -o $@ $< $(LIB_OBJ) $(LDLIBS)
 
-# Replay the saved reproducers tests/fuzz/crashes/<target>-* with the known-issue
-# skips off (FZ_STRICT=1; not in CI: they document open library bugs, and each one
-# prints its violation until the bug is fixed).
+# Replay the saved reproducers of open library bugs, tests/fuzz/crashes/<target>-*
+# (not in CI: each prints its violation until the bug is fixed; once fixed, the
+# input moves to the seed corpus tests/fuzz/corpus/<target>/).
 fuzz-repro: fuzz-build
 	@for f in tests/fuzz/crashes/fuzz_*; do \
 	  [ -f "$$f" ] || continue; t=$$(basename $$f | sed 's/-.*//'); \
-	  echo "== $$f"; FZ_STRICT=1 $(FUZZ_DIR)/tests/fuzz/$$t $$f 2>&1 | grep -e 'property violated' -e 'runtime error' | head -2; \
+	  echo "== $$f"; $(FUZZ_DIR)/tests/fuzz/$$t $$f 2>&1 | grep -e 'property violated' -e 'runtime error' | head -2; \
 	done
 
 # make stress [STRESS_N=10000000] [STRESS_THREADS=2]: random and near-degenerate polygons
@@ -212,7 +215,8 @@ $(BUILD)/tools/stress: tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) 
 # ---- Python tools: Mitsuba 3 / Dr.Jit accuracy oracle (tools/oracle.py, bench/ORACLE.md) ----
 # venv: build/venv from tools/requirements.txt, reinstalled only when that file changes
 # (its sha256 is kept in a stamp file).  oracle: full run, writes bench/ORACLE.md.
-# oracle-check: the CI subset (20 configurations); non-zero exit on any disagreement.
+# oracle-check: the CI subset (20 configurations, one 64x64 image); non-zero exit on any disagreement.
+# Both run the harness export tool (bench/oracle_export.c) for the image check.
 VENV       ?= build/venv
 PYTHON     ?= python3
 VENV_STAMP := $(VENV)/.requirements.sha256
@@ -228,8 +232,10 @@ venv:
 	  echo "$$h" > $(VENV_STAMP); \
 	fi
 
-oracle: venv $(SHARED)
-	SHLIGHT_LIB=$(abspath $(SHARED)) $(VENV)/bin/python tools/oracle.py
+oracle: venv $(SHARED) $(BUILD)/bench/oracle_export
+	SHLIGHT_LIB=$(abspath $(SHARED)) SHLIGHT_EXPORT=$(abspath $(BUILD)/bench/oracle_export) \
+	  $(VENV)/bin/python tools/oracle.py
 
-oracle-check: venv $(SHARED)
-	SHLIGHT_LIB=$(abspath $(SHARED)) $(VENV)/bin/python tools/oracle.py --check
+oracle-check: venv $(SHARED) $(BUILD)/bench/oracle_export
+	SHLIGHT_LIB=$(abspath $(SHARED)) SHLIGHT_EXPORT=$(abspath $(BUILD)/bench/oracle_export) \
+	  $(VENV)/bin/python tools/oracle.py --check

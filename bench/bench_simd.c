@@ -1,8 +1,10 @@
-/* Batched SIMD kernel benchmark (shl_polygon_batch_f), one core, triangle light:
+/* Batched SIMD kernel benchmark (shl_polygon_batch_f, shl_sphere_batch_f), one core, triangle light:
  *  - speed vs the scalar double single-point loop (shl_polygon, shl_polygon_grad), lmax 2..14,
  *  - the same kernel compiled scalar (SHLIGHT_ISA=scalar) and the scalar float path, for scale,
  *  - fraction of peak: this core's FMA throughput measured in the same run
- *    (independent FMA chains in registers) against the kernel's counted flops.
+ *    (independent FMA chains in registers) against the kernel's counted flops,
+ *  - spherical light: shl_sphere_batch_f vs shl_sphere / shl_sphere_grad (and the same kernel
+ *    compiled scalar, and shl_sphere_f), lmax 2..14.
  * All ratios come from one run.  CSV: $BUILD/bench/bench_simd.csv (argv[1] overrides). */
 #include "shlight.h"
 #include "util.h"
@@ -52,6 +54,40 @@ static void run_scalar_float(void *p)
         const float *x = j->pf + 3 * (i % NPTS);
         if (j->grad) shl_polygon_grad_f(j->ctx, x, j->vf, NV, j->out, j->grad);
         else shl_polygon_f(j->ctx, x, j->vf, NV, j->out);
+    }
+    bench_sink += j->out[1];
+}
+
+/* Spherical light (radius 0.5, centre (0, 0, 3)) at the same points. */
+static const float sphere_cf[3] = {0.0f, 0.0f, 3.0f};
+static const double sphere_cd[3] = {0.0, 0.0, 3.0};
+
+static void run_sphere_batch(void *p)
+{
+    job *j = p;
+    for (long done = 0; done < j->inner; done += NPTS)
+        shl_sphere_batch_f(j->ctx, sphere_cf, 0.5f, NPTS, j->pf, j->out, j->grad);
+    bench_sink += j->out[1];
+}
+
+static void run_sphere_double(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        const double *x = j->pd + 3 * (i % NPTS);
+        if (j->gradd) shl_sphere_grad(j->ctx, x, sphere_cd, 0.5, j->outd, j->gradd);
+        else shl_sphere(j->ctx, x, sphere_cd, 0.5, j->outd);
+    }
+    bench_sink += j->outd[1];
+}
+
+static void run_sphere_float(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        const float *x = j->pf + 3 * (i % NPTS);
+        if (j->grad) shl_sphere_grad_f(j->ctx, x, sphere_cf, 0.5f, j->out, j->grad);
+        else shl_sphere_f(j->ctx, x, sphere_cf, 0.5f, j->out);
     }
     bench_sink += j->out[1];
 }
@@ -245,6 +281,49 @@ int main(int argc, char **argv)
     printf("\nMedians over 15 rounds; in each round every variant is timed once (calls of ~10 ms) and\n"
            "the speed-up and the fraction of peak are ratios within the round.\n"
            "flops/eval: counted from simd/poly_batch.h (kernel_flops in this file).\n");
+
+    /* spherical light: shl_sphere_batch_f vs the single-point loops */
+    if (csv) fprintf(csv, "sphere_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,,,,\n");
+    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+        printf("\n## Sphere %s (radius 0.5 at distance ~3), one core (%d points per batch call; time per point)\n\n",
+               with_grad ? "coefficients and gradients (shl_sphere_grad)" : "coefficients (shl_sphere)", NPTS);
+        printf("| lmax | scalar double ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | scalar float ns |\n", isa);
+        printf("|---|---|---|---|---|---|\n");
+        for (int lmax = 2; lmax <= 14; lmax += 2) {
+            shl_ctx *ctx, *ctx_scalar;
+            shl_ctx_create(lmax, &ctx);
+            setenv("SHLIGHT_ISA", "scalar", 1);
+            shl_ctx_create(lmax, &ctx_scalar);
+            unsetenv("SHLIGHT_ISA");
+            job jb = j, jd = j, js = j, jf = j;
+            jb.ctx = jd.ctx = jf.ctx = ctx;
+            js.ctx = ctx_scalar;
+            jb.grad = js.grad = jf.grad = with_grad ? grad : NULL;
+            jd.gradd = with_grad ? gradd : NULL;
+            calibrate(run_sphere_batch, &jb, NPTS);
+            calibrate(run_sphere_batch, &js, NPTS);
+            calibrate(run_sphere_double, &jd, 64);
+            calibrate(run_sphere_float, &jf, 64);
+            enum { ROUNDS = 15 };
+            double tb[ROUNDS], td[ROUNDS], ts[ROUNDS], tf[ROUNDS], speed[ROUNDS];
+            for (int r = 0; r < ROUNDS; ++r) {
+                tb[r] = once(run_sphere_batch, &jb);
+                td[r] = once(run_sphere_double, &jd);
+                ts[r] = once(run_sphere_batch, &js);
+                tf[r] = once(run_sphere_float, &jf);
+                speed[r] = td[r] / tb[r];
+            }
+            const double mb = median(tb, ROUNDS), md = median(td, ROUNDS), ms = median(ts, ROUNDS), mf = median(tf, ROUNDS);
+            const double msp = median(speed, ROUNDS);
+            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f |\n", lmax, md * 1e9, mb * 1e9, msp, ms * 1e9, mf * 1e9);
+            if (csv)
+                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,,,,\n", with_grad, lmax, isa, mb * 1e9, md * 1e9, msp, ms * 1e9,
+                        mf * 1e9);
+            shl_ctx_destroy(ctx);
+            shl_ctx_destroy(ctx_scalar);
+        }
+    }
+    printf("\nSphere: medians over 15 rounds, speed-ups within each round, as above.\n");
     if (csv) fclose(csv);
     shl_ctx_destroy(probe);
     printf("(checksum %g)\n", (double)bench_sink);

@@ -202,6 +202,10 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
  * (with exact node gradients); Hermite reproduces node values and every field whose
  * monomials x^i y^j z^k (i, j, k <= 3) satisfy: i >= 2 => j = k = 0, j >= 2 => k = 0
  * (e.g. any cubic in one variable, xyz, x y^3, x y z^3, but not x^2 y).
+ * Float grids interpolate with the SIMD kernel of the context that created the
+ * grid (shl_ctx_isa; sums in double, within a few DBL_EPSILON times the data's
+ * scale of the scalar reference, which SHLIGHT_ISA=scalar selects; README
+ * "Grid interpolation"); double grids always use the reference.
  */
 int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
                     double *rgb, int nthreads);
@@ -430,6 +434,26 @@ int shl_hvl_radius_fov(int count, const double *dist, double fov, double scale, 
  */
 int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
                         float *coeffs, float *grad);
+
+/**
+ * shl_sphere_f / shl_sphere_grad_f of one sphere (center, radius) at npts >= 0
+ * points pts[3*p .. 3*p+2], vectorized across points (AVX2: 8 per vector,
+ * NEON: 4): point p writes coeffs + nc*p (nc entries) and, if grad != NULL,
+ * grad + 3*nc*p (3*nc entries, grad[a*nc + k] = d coeffs[k] / d x[a]).  Same
+ * semantics as the single-point calls: each point's cap is set up in double,
+ * the band recurrences run in float; a point inside or on the sphere gets
+ * coeffs[0] = sqrt(4 pi), 0 elsewhere and a zero gradient.  Coefficients are
+ * always finite; the gradient grows like 1/sqrt(|center - x| - radius) near
+ * the surface and overflows float only where shl_sphere_grad_f does (distances
+ * below ~1e-38).  Accuracy: README "Batch evaluation and SIMD".  pts and coeffs
+ * may be NULL when npts is 0.  Errors, before anything is written: NULL
+ * pointers (SHL_ENULL), npts < 0 or radius <= 0 (SHL_EDOMAIN), a non-finite
+ * center, radius or point (SHL_ENONFINITE); allocates one workspace per call
+ * of 4 (vlen (q nc + 10) + 3 nc) + 64 bytes, q = 4 with gradients, 1 without
+ * (AVX2, lmax 30, gradients: 135 KB; SHL_ENOMEM).
+ */
+int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
+                       float *coeffs, float *grad);
 
 /**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with

@@ -39,6 +39,9 @@ const shl__isa shl__isa_scalar = {
     .vlen = 1,
     .poly_work_bytes = shl__poly_work_bytes_scalar,
     .poly_batch = shl__poly_batch_scalar,
+    .sphere_work_bytes = shl__sphere_work_bytes_scalar,
+    .sphere_batch = shl__sphere_batch_scalar,
+    .interp_f = shl__interp_ref_f,
 };
 #ifdef SHL_HAVE_AVX2
 const shl__isa shl__isa_avx2 = {
@@ -46,6 +49,9 @@ const shl__isa shl__isa_avx2 = {
     .vlen = 8,
     .poly_work_bytes = shl__poly_work_bytes_avx2,
     .poly_batch = shl__poly_batch_avx2,
+    .sphere_work_bytes = shl__sphere_work_bytes_avx2,
+    .sphere_batch = shl__sphere_batch_avx2,
+    .interp_f = shl__interp_f_avx2,
 };
 #endif
 #ifdef SHL_HAVE_NEON
@@ -54,6 +60,9 @@ const shl__isa shl__isa_neon = {
     .vlen = 4,
     .poly_work_bytes = shl__poly_work_bytes_neon,
     .poly_batch = shl__poly_batch_neon,
+    .sphere_work_bytes = shl__sphere_work_bytes_neon,
+    .sphere_batch = shl__sphere_batch_neon,
+    .interp_f = shl__interp_f_neon,
 };
 #endif
 

@@ -26,7 +26,8 @@ int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], 
     size_t nnodes = 1;
     for (int a = 0; a < 3; ++a) {
         if (res[a] < 2 || res[a] > SHL_GRID_RES_MAX || !(lo[a] < hi[a])) return SHL_EDOMAIN;
-        if (!isfinite((hi[a] - lo[a]) / (res[a] - 1))) return SHL_EDOMAIN; /* extent overflows */
+        const double h = (hi[a] - lo[a]) / (res[a] - 1);
+        if (!isfinite(h) || !(h > 0.0)) return SHL_EDOMAIN; /* extent overflows, or spacing underflows to 0 */
         nnodes *= (size_t)res[a];
     }
     const size_t node_len = 12 * (size_t)ctx->nc, esize = elem_size(storage);
@@ -41,6 +42,7 @@ int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], 
     g->lmax = ctx->lmax;
     g->nc = ctx->nc;
     g->storage = storage;
+    g->isa = ctx->isa;
     g->nnodes = nnodes;
     g->node_len = node_len;
     for (int a = 0; a < 3; ++a) {

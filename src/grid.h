@@ -12,6 +12,7 @@ struct shl_grid {
     int res[3];
     double lo[3], hi[3], h[3]; /* h: node spacing (hi - lo) / (res - 1) */
     size_t nnodes, node_len;
+    const shl__isa *isa;     /* interpolation kernel: the creating context's (dispatch.c) */
     void *data;
 };
 

@@ -1,18 +1,13 @@
 /* Interpolation of grid coefficients at arbitrary points (Wu et al. 2020,
  * Alg. 1 lines 9-16): trilinear, first-order Taylor blended by inverse
  * distance (Annen et al. 2004, Eq. 14-16), tricubic Hermite (Wu 2020 Alg. 4). */
+#include "../simd/batch.h"
 #include "grid.h"
 #include "parallel.h"
 #include <math.h>
 
-/* Per-point quantities shared by the kernels of interp_kernel.h. */
-typedef struct {
-    size_t ofs[8];   /* element offset of corner j = ix + 2 iy + 4 iz */
-    double u[3];     /* position in the cell, [0, 1] per axis */
-    double w[8];     /* trilinear or Taylor (Annen Eq. 16) weights */
-    double wd[8][3]; /* Taylor: w_j (p - p_j) */
-    double hw[3][4]; /* Hermite basis per axis: value L, slope L, value R, slope R (slopes x spacing) */
-} point_setup;
+/* Per-point quantities shared by the kernels of interp_kernel.h and simd/interp_batch.h. */
+typedef shl__interp_point point_setup;
 
 #define ELEM float
 #define SUFFIX(name) name##_f
@@ -24,6 +19,12 @@ typedef struct {
 #include "interp_kernel.h"
 #undef ELEM
 #undef SUFFIX
+
+/* The scalar table's interpolation (dispatch.c): the reference above. */
+void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+{
+    interp_f(data, method, nc, s, out);
+}
 
 /* Cell and local coordinates of p, clamped to the box. */
 static void locate(const shl_grid *g, const double p[3], point_setup *s)
@@ -52,9 +53,17 @@ static void trilinear_weights(point_setup *s)
 static void taylor_weights(const shl_grid *g, double b, point_setup *s)
 {
     double d[8][3], dist[8], dmin = INFINITY, sum = 0.0;
+    /* distances in units of 2^e, the largest spacing in [2^e, 2^(e+1)) (h > 0: shl_grid_create):
+     * the weights are ratios, and squares of huge or tiny cells would over/underflow */
+    const int e = ilogb(fmax(g->h[0], fmax(g->h[1], g->h[2])));
+    const double hs[3] = {ldexp(g->h[0], -e), ldexp(g->h[1], -e), ldexp(g->h[2], -e)};
     for (int j = 0; j < 8; ++j) {
-        for (int a = 0; a < 3; ++a) d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
-        dist[j] = sqrt(d[j][0] * d[j][0] + d[j][1] * d[j][1] + d[j][2] * d[j][2]);
+        double ds[3];
+        for (int a = 0; a < 3; ++a) {
+            d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
+            ds[a] = (s->u[a] - ((j >> a) & 1)) * hs[a];
+        }
+        dist[j] = sqrt(ds[0] * ds[0] + ds[1] * ds[1] + ds[2] * ds[2]);
         dmin = fmin(dmin, dist[j]);
     }
     for (int j = 0; j < 8; ++j) {
@@ -104,9 +113,9 @@ static void interp_range(void *arg, int worker, long begin, long end)
         else
             trilinear_weights(&s);
         if (g->storage == SHL_GRID_DOUBLE)
-            interp_d(g, job->method, &s, job->out + nv * (size_t)p);
-        else
-            interp_f(g, job->method, &s, job->out + nv * (size_t)p);
+            interp_d(g->data, job->method, g->nc, &s, job->out + nv * (size_t)p);
+        else /* the context's kernel (simd/interp_batch.h; scalar: interp_f) */
+            g->isa->interp_f(g->data, job->method, g->nc, &s, job->out + nv * (size_t)p);
     }
 }
 

@@ -63,14 +63,14 @@ static void SUFFIX(hermite)(const ELEM *const f[8], const point_setup *s, int nc
     }
 }
 
-static void SUFFIX(interp)(const shl_grid *g, int method, const point_setup *s, double *restrict out)
+static void SUFFIX(interp)(const ELEM *data, int method, int nc, const point_setup *s, double *restrict out)
 {
-    const ELEM *data = g->data, *f[8];
+    const ELEM *f[8];
     for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
     if (method == SHL_INTERP_TRILINEAR)
-        SUFFIX(trilinear)(f, s, g->nc, out);
+        SUFFIX(trilinear)(f, s, nc, out);
     else if (method == SHL_INTERP_TAYLOR)
-        SUFFIX(taylor)(f, s, g->nc, out);
+        SUFFIX(taylor)(f, s, nc, out);
     else
-        SUFFIX(hermite)(f, s, g->nc, out);
+        SUFFIX(hermite)(f, s, nc, out);
 }

@@ -517,6 +517,8 @@ SHL_TEST(grid_bad_input)
     CHECK(shl_grid_create(ctx, lo, hi, resbig, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
     CHECK(shl_grid_create(ctx, hi, lo, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
     CHECK(shl_grid_create(ctx, lo, lo, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
+    const double hi_den[3] = {1, 0x1p-1074, 1}; /* spacing 2^-1074 / 2 underflows to 0 */
+    CHECK(shl_grid_create(ctx, lo, hi_den, res, SHL_GRID_FLOAT, &out) == SHL_EDOMAIN);
     CHECK(shl_grid_create(ctx, lo, hi, res, 7, &out) == SHL_EDOMAIN);
     CHECK(shl_grid_create(ctx, nan3, hi, res, SHL_GRID_FLOAT, &out) == SHL_ENONFINITE);
     const double huge_lo[3] = {-1e308, 0, 0}, huge_hi[3] = {1e308, 1, 1};
@@ -645,5 +647,42 @@ SHL_TEST(grid_alloc_and_thread_failures)
     harness_note("%d allocation failures, %d thread-creation failures handled", nomem, ethread);
     shl_grid_destroy(g);
     shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Taylor weights of huge and tiny cells (issue 8, K5): the box, the point and the
+ * node values times (1, 2^-k for gradients) at scale 2^k are exact, and the
+ * weights are ratios of distances taken in units of a power of two, so the
+ * interpolated values must equal the scale-1 ones bit for bit (scale 1 is
+ * checked against polynomials in grid_interp_reproduces_polynomials).  Before:
+ * NaN above 2^511, equal weights below 2^-537.  Double storage: the reference kernel. */
+SHL_TEST(grid_taylor_extreme_cells)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(1, &ctx) == SHL_OK);
+    enum { N1 = 3 * SHL_NCOEFFS(1) };
+    const int res[3] = {2, 3, 2}, ks[] = {-1000, -600, 600, 1000};
+    const double lo1[3] = {-1, 0, 0.5}, hi1[3] = {1, 1, 2.5}, p1[6] = {0.25, 0.375, 1.0, -0.75, 0.875, 2.25};
+    double ref[2 * N1], out[2 * N1];
+    int bad = 0;
+    for (int s = -1; s < (int)(sizeof ks / sizeof ks[0]); ++s) {
+        const int k = s < 0 ? 0 : ks[s];
+        double lo[3], hi[3], p[6];
+        for (int a = 0; a < 3; ++a) lo[a] = ldexp(lo1[a], k), hi[a] = ldexp(hi1[a], k);
+        for (int i = 0; i < 6; ++i) p[i] = ldexp(p1[i], k);
+        shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+        for (int n = 0; n < 12; ++n) {
+            const int idx[3] = {n % 2, n / 2 % 3, n / 6};
+            double v[N1], gr[3 * N1];
+            for (int i = 0; i < N1; ++i) v[i] = 0.125 * ((n * 7 + i * 3) % 11) - 0.5;
+            for (int i = 0; i < 3 * N1; ++i) gr[i] = ldexp(0.25 * ((n * 5 + i) % 7) - 0.75, -k); /* d/dx scales by 2^-k */
+            CHECK(shl_grid_set_node(g, idx, v, gr) == SHL_OK);
+        }
+        CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, 2.0, 2, p, s < 0 ? ref : out, 1) == SHL_OK);
+        if (s >= 0) bad += memcmp(ref, out, sizeof out) != 0;
+        shl_grid_destroy(g);
+    }
+    CHECK(bad == 0 && all_finite(ref, 2 * N1));
+    harness_note("cells 2^-1000..2^1000: %d of 4 scales differ from scale 1", bad);
     shl_ctx_destroy(ctx);
 }

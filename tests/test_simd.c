@@ -7,6 +7,7 @@
 #include "geom.h"
 #include "../simd/batch.h"
 #include "harness.h"
+#include "isa_ctx.h"
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -15,26 +16,6 @@
 extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
 
 enum { LMAX = 14, NC = SHL_NCOEFFS(LMAX), NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX), MAXPTS = 40 };
-static const char *const isas[] = {"scalar", "avx2", "neon"};
-enum { NISA = sizeof isas / sizeof isas[0] };
-
-/* Context whose batch kernels are isa, or NULL when this machine cannot run it. */
-static shl_ctx *isa_ctx(const char *isa, int lmax)
-{
-    const char *old = getenv("SHLIGHT_ISA");
-    char saved[64] = "";
-    if (old) snprintf(saved, sizeof saved, "%s", old);
-    setenv("SHLIGHT_ISA", isa, 1);
-    shl_ctx *ctx = NULL;
-    CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
-    if (old) setenv("SHLIGHT_ISA", saved, 1);
-    else unsetenv("SHLIGHT_ISA");
-    if (ctx && strcmp(shl_ctx_isa(ctx), isa) != 0) {
-        shl_ctx_destroy(ctx);
-        return NULL;
-    }
-    return ctx;
-}
 
 /* A polygon (float) and points. */
 typedef struct {
@@ -435,4 +416,80 @@ SHL_TEST(simd_bad_input)
     CHECK(shl_polygon_batch_f(ctx, v, 4, 0, NULL, NULL, NULL) == SHL_OK);
     CHECK(shl_polygon_batch_f(ctx, v, 4, 2, pts, c, NULL) == SHL_OK && c[0] > 0.0f && c[32] == 7.0f);
     shl_ctx_destroy(ctx);
+}
+
+/* Extreme scales of the float batch (issue 8, K3, B3), every ISA:
+ *  - vertices equal up to the sign of zero (extent 0): zeros, no undefined
+ *    behaviour (ilogb(0) was negated; UBSan in make SANITIZE=1);
+ *  - a polygon with a denormal extent (2^-130 times small integers, exact) seen
+ *    from 2^10 extents: the batch scales by the extent's power of two, so the
+ *    coefficients equal those at scale 1 bit for bit and the gradients are
+ *    exactly 2^130 times (finite: ~2^100); before, 2^130 overflowed float: NaN;
+ *  - a 2^-60 polygon at z = -2^120 (coordinates 2^180 extents from the origin):
+ *    every point is in its plane or farther than 2^40 extents, so zeros; before: NaN. */
+SHL_TEST(simd_extreme_scales)
+{
+    enum { LM = 6, N6 = SHL_NCOEFFS(LM), NP = 3 };
+    const float zeros[9] = {0.0f, 0.0f, 0.0f, -0.0f, 0.0f, 0.0f, 0.0f, -0.0f, 0.0f}, zp[3] = {0.5f, 0.5f, 1.0f};
+    const float quad1[12] = {1, 0, 0, 3, 1, 0, 2, 3, 0, 0, 2, 0}, pts1[3 * NP] = {1024, 512, 768, -512, 256, 1024, 8, 4, -1024};
+    float quad[12], pts[3 * NP], far[12], farp[3 * NP];
+    for (int i = 0; i < 12; ++i) quad[i] = ldexpf(quad1[i], -130);
+    for (int i = 0; i < 3 * NP; ++i) pts[i] = ldexpf(pts1[i], -130);
+    for (int i = 0; i < 12; ++i) far[i] = i % 3 == 2 ? -0x1p120f : ldexpf(quad1[i], -60);
+    for (int i = 0; i < 3 * NP; ++i) farp[i] = i % 3 == 2 ? (i == 5 ? 0x1p100f : -0x1p120f) : ldexpf(pts1[i], -70);
+    int bad = 0;
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], LM);
+        if (!ctx) continue;
+        static float c1[NP * N6], g1[3 * NP * N6], c[NP * N6], g[3 * NP * N6];
+        CHECK(shl_polygon_batch_f(ctx, zeros, 3, 1, zp, c, g) == SHL_OK);
+        for (int k = 0; k < N6; ++k) bad += c[k] != 0.0f;
+        for (int k = 0; k < 3 * N6; ++k) bad += g[k] != 0.0f;
+        CHECK(shl_polygon_batch_f(ctx, quad1, 4, NP, pts1, c1, g1) == SHL_OK);
+        CHECK(shl_polygon_batch_f(ctx, quad, 4, NP, pts, c, g) == SHL_OK);
+        bad += memcmp(c, c1, sizeof c) != 0 || !(c1[0] != 0.0f);
+        for (int k = 0; k < 3 * NP * N6; ++k) bad += !(g[k] == ldexpf(g1[k], 130) && isfinite(g[k]));
+        CHECK(shl_polygon_batch_f(ctx, far, 4, NP, farp, c, g) == SHL_OK);
+        for (int k = 0; k < NP * N6; ++k) bad += c[k] != 0.0f;
+        for (int k = 0; k < 3 * NP * N6; ++k) bad += g[k] != 0.0f;
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(bad == 0);
+    harness_note("signed-zero, denormal (2^-130) and far (2^180 extents) polygons: %d values differ", bad);
+}
+
+/* Points the all-float geometry cannot resolve (issue 8, B1, B2), every ISA:
+ * heights below 2^-16 of the distance to the farthest vertex, where float rounding
+ * decided the side (seen: dL00/dz with the wrong sign), and points within 2^-16
+ * extents of a vertex (seen: |L_lm| = 2.4e11 > K_l 2 pi).  Documented: they take the
+ * scalar path, so the batch equals shl_polygon_grad_f bit for bit there (that path
+ * is checked against the quadrature reference in test_polygon.c), and the
+ * gradient's normal component has the sign of the double reference's. */
+SHL_TEST(simd_float_unresolved_points)
+{
+    enum { LM = 8, N8 = SHL_NCOEFFS(LM), NP = 5 };
+    const float v[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const float p[3 * NP] = {3.0f, 0.5f, 0x1p-21f,  0.5f, 0.25f, -0x1p-22f, /* grazing; inside the footprint */
+                             1.0f + 0x1p-20f, 1.0f - 0x1p-21f, 0x1p-19f,    /* next to vertex 2 */
+                             -0x1p-18f, 0x1p-19f, -0x1p-20f, 2.0f, 2.0f, 0.0f}; /* next to vertex 0; in the plane */
+    static float c[NP * N8], g[3 * NP * N8], cf[N8], gf[3 * N8];
+    static double cd[N8], gd[3 * N8];
+    const double vd[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    int bad = 0, isa_count = 0;
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], LM);
+        if (!ctx) continue;
+        ++isa_count;
+        CHECK(shl_polygon_batch_f(ctx, v, 4, NP, p, c, g) == SHL_OK);
+        for (int q = 0; q < NP; ++q) {
+            const double x[3] = {p[3 * q], p[3 * q + 1], p[3 * q + 2]};
+            CHECK(shl_polygon_grad_f(ctx, p + 3 * q, v, 4, cf, gf) == SHL_OK);
+            CHECK(shl_polygon_grad(ctx, x, vd, 4, cd, gd) == SHL_OK);
+            bad += memcmp(c + q * N8, cf, sizeof cf) != 0 || memcmp(g + 3 * q * N8, gf, sizeof gf) != 0;
+            bad += (g[(3 * q + 2) * N8] > 0.0f) != (gd[2 * N8] > 0.0); /* dL00/dz */
+        }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(bad == 0 && isa_count > 0);
+    harness_note("%d points x %d ISAs: %d differ from shl_polygon_grad_f or in the sign of dL00/dz", NP, isa_count, bad);
 }

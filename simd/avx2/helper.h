@@ -35,6 +35,15 @@ static inline vf vf_copysign(vf a, vf b)
     return _mm256_or_ps(_mm256_andnot_ps(vf_signmask(), a), _mm256_and_ps(b, vf_signmask()));
 }
 
+/* Double lanes (grid interpolation, simd/interp_batch.h): 4 per vector. */
+#define SHL_VDLEN 4
+typedef __m256d vd;
+static inline vd vd_set1(double a) { return _mm256_set1_pd(a); }
+static inline vd vd_load_float(const float *p) { return _mm256_cvtps_pd(_mm_loadu_ps(p)); } /* p[0..3] widened */
+static inline void vd_store(double *p, vd a) { _mm256_storeu_pd(p, a); }
+static inline vd vd_mul(vd a, vd b) { return _mm256_mul_pd(a, b); }
+static inline vd vd_fma(vd a, vd b, vd c) { return _mm256_fmadd_pd(a, b, c); }
+
 /* Tile transpose-store: src holds 8 rows of 8 lanes (row i at src + 8 i); lane j
  * of every row goes to dst + j * stride (8 floats), for j < nvalid.  Unpack
  * pairs of rows, shuffle pairs of pairs, then swap 128-bit halves. */

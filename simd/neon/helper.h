@@ -35,6 +35,15 @@ static inline vf vf_mulsign(vf a, vf b)
 }
 static inline vf vf_copysign(vf a, vf b) { return vbslq_f32(vdupq_n_u32(0x80000000u), b, a); }
 
+/* Double lanes (grid interpolation, simd/interp_batch.h): 2 per vector. */
+#define SHL_VDLEN 2
+typedef float64x2_t vd;
+static inline vd vd_set1(double a) { return vdupq_n_f64(a); }
+static inline vd vd_load_float(const float *p) { return vcvt_f64_f32(vld1_f32(p)); } /* p[0..1] widened */
+static inline void vd_store(double *p, vd a) { vst1q_f64(p, a); }
+static inline vd vd_mul(vd a, vd b) { return vmulq_f64(a, b); }
+static inline vd vd_fma(vd a, vd b, vd c) { return vfmaq_f64(c, a, b); }
+
 /* Tile transpose-store (see simd/avx2/helper.h): vld4q de-interleaves the
  * 4 rows of 4 lanes into the 4 lanes' rows. */
 static inline void vf_store_transposed(const float *src, float *dst, size_t stride, int nvalid)

@@ -1,0 +1,312 @@
+/* Grid interpolation benchmark (shl_grid_interp, float storage), one core unless stated:
+ *  - vertices per second for trilinear, Taylor (Annen 2004) and Hermite (Wu 2020 Alg. 4)
+ *    at lmax 4 and 8, from an L2-resident grid (4^3 nodes) and from a grid far larger
+ *    than the last-level cache (>= 120 MB, random vertex order: every corner misses);
+ *  - the context's SIMD kernel (simd/interp_batch.h) against the scalar reference
+ *    (SHLIGHT_ISA=scalar: src/interp_kernel.h), as a ratio within each round;
+ *  - grid bytes read per vertex and the achieved share of this core's memory bandwidth,
+ *    measured in the same run (STREAM-like read and triad kernels);
+ *  - per-vertex set-up cost: lmax 0 (3 coefficients, shorter than a vector: both
+ *    variants run the reference) is the cell search and weights plus 8 tiny loads,
+ *    the part vectorizing across coefficients does not touch; 2 threads against 1;
+ *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
+ * CSV: $BUILD/bench/bench_interp.csv (argv[1] overrides). */
+#include "shlight.h"
+#include "util.h"
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { CHUNK = 128, NPTS = 1 << 16, ROUNDS = 11 };
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void *xmalloc(size_t n)
+{
+    void *p = malloc(n);
+    if (!p) {
+        fprintf(stderr, "bench_interp: out of memory (%zu bytes)\n", n);
+        exit(1);
+    }
+    return p;
+}
+
+/* ---- memory bandwidth of this core: read (sum) and triad a = b + s c ---- */
+enum { BW_DOUBLES = 1 << 25 }; /* 256 MB per array: far beyond the caches */
+
+static double read_bw(const double *a)
+{
+    double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0, s6 = 0, s7 = 0;
+    const double t0 = bench_now();
+    for (size_t i = 0; i < BW_DOUBLES; i += 8) {
+        s0 += a[i];
+        s1 += a[i + 1];
+        s2 += a[i + 2];
+        s3 += a[i + 3];
+        s4 += a[i + 4];
+        s5 += a[i + 5];
+        s6 += a[i + 6];
+        s7 += a[i + 7];
+    }
+    const double t = bench_now() - t0;
+    bench_sink += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7;
+    return BW_DOUBLES * sizeof(double) / t;
+}
+
+static double triad_bw(double *a, const double *b, const double *c, size_t n)
+{
+    const double s = 1.0000001, t0 = bench_now();
+    for (size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
+    const double t = bench_now() - t0;
+    bench_sink += a[n / 2];
+    return 3.0 * n * sizeof(double) / t; /* STREAM convention: 24 bytes per element */
+}
+
+/* ---- grids ---- */
+static void must(int st, const char *what)
+{
+    if (st != SHL_OK) {
+        fprintf(stderr, "bench_interp: %s: %s\n", what, shl_strerror(st));
+        exit(1);
+    }
+}
+
+/* Grid of res^3 nodes over [0, 1]^3 with pseudo-random node data (every page written). */
+static shl_grid *make_grid(const shl_ctx *ctx, int res)
+{
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    const int r3[3] = {res, res, res}, nc = SHL_NCOEFFS(shl_ctx_lmax(ctx));
+    shl_grid *g;
+    must(shl_grid_create(ctx, lo, hi, r3, SHL_GRID_FLOAT, &g), "grid_create");
+    double *rgb = xmalloc(sizeof(double) * 12 * nc), *grad = rgb + 3 * nc;
+    uint64_t s = 12345;
+    for (int k = 0; k < res; ++k)
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i) {
+                for (int q = 0; q < 12 * nc; ++q) {
+                    s = s * 6364136223846793005ull + 1442695040888963407ull;
+                    rgb[q] = (double)(s >> 11) * 0x1p-53 - 0.5;
+                }
+                const int idx[3] = {i, j, k};
+                must(shl_grid_set_node(g, idx, rgb, grad), "set_node");
+            }
+    free(rgb);
+    return g;
+}
+
+typedef struct {
+    const shl_grid *g;
+    int method, nthreads;
+    long chunk;          /* vertices per shl_grid_interp call */
+    long npts;           /* vertices per timed call: chunks over pts[0 .. npts) */
+    const double *pts;
+    double *out;         /* chunk * 3 nc doubles, reused: stays in cache */
+} job;
+
+static double run(const job *j) /* seconds per vertex */
+{
+    const double t0 = bench_now();
+    for (long p = 0; p < j->npts; p += j->chunk)
+        must(shl_grid_interp(j->g, j->method, 2.0, (int)j->chunk, j->pts + 3 * p, j->out, j->nthreads), "interp");
+    const double t = bench_now() - t0;
+    bench_sink += j->out[1];
+    return t / (double)j->npts;
+}
+
+/* Bytes of grid data one vertex reads: 8 corners x (values 3 nc, trilinear; values and
+ * 9 nc gradients, Taylor and Hermite) x 4 bytes. */
+static double bytes_per_vertex(int method, int nc)
+{
+    return 8.0 * (method == SHL_INTERP_TRILINEAR ? 3 : 12) * nc * sizeof(float);
+}
+
+static FILE *csv;
+
+/* Polygon batch (shl_polygon_batch_f) at lmax 8 on 256 points per call: seconds per point. */
+static double polygon_batch_time(int n, int with_grad, const double *pts)
+{
+    enum { NP = 256 };
+    shl_ctx *ctx;
+    must(shl_ctx_create(8, &ctx), "ctx");
+    float v[12], p[3 * NP];
+    static float out[NP * 81], grad[3 * NP * 81];
+    for (int i = 0; i < n; ++i) { /* triangle or square of radius 1 at z = 2, points in [-1, 1]^3 */
+        v[3 * i] = (float)cos(2 * M_PI * i / n);
+        v[3 * i + 1] = (float)sin(2 * M_PI * i / n);
+        v[3 * i + 2] = 2.0f;
+    }
+    for (int k = 0; k < 3 * NP; ++k) p[k] = (float)(2.0 * pts[k] - 1.0);
+    double t[ROUNDS];
+    for (int r = 0; r <= ROUNDS; ++r) { /* round 0: warm-up */
+        const double t0 = bench_now();
+        for (int q = 0; q < 40; ++q)
+            must(shl_polygon_batch_f(ctx, v, n, NP, p, out, with_grad ? grad : NULL), "polygon_batch");
+        if (r) t[r - 1] = (bench_now() - t0) / (40.0 * NP);
+    }
+    bench_sink += out[1];
+    shl_ctx_destroy(ctx);
+    return median(t, ROUNDS);
+}
+
+int main(int argc, char **argv)
+{
+    const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_interp.csv";
+    csv = fopen(csv_path, "w");
+    bench_print_machine(stdout);
+    shl_ctx *probe;
+    must(shl_ctx_create(0, &probe), "ctx");
+    const char *isa = shl_ctx_isa(probe);
+    printf("library: %s\nSIMD ISA: %s; reference: SHLIGHT_ISA=scalar (src/interp_kernel.h)\n", shl_build_info(), isa);
+
+    /* vertices: uniform in the box, in random order (no locality between neighbours) */
+    double *pts = xmalloc(sizeof(double) * 3 * NPTS);
+    srand(7);
+    for (int k = 0; k < 3 * NPTS; ++k) pts[k] = (double)rand() / RAND_MAX;
+
+    double *bw_a = xmalloc(sizeof(double) * BW_DOUBLES), *bw_b = xmalloc(sizeof(double) * BW_DOUBLES / 4),
+           *bw_c = xmalloc(sizeof(double) * BW_DOUBLES / 4);
+    for (size_t i = 0; i < BW_DOUBLES; ++i) bw_a[i] = 1.0 / (1.0 + (double)(i & 1023));
+    for (size_t i = 0; i < BW_DOUBLES / 4; ++i) bw_b[i] = bw_c[i] = bw_a[i], bw_a[i] = 0.0;
+    double rbw[5], tbw[5];
+    for (int r = 0; r < 5; ++r) {
+        rbw[r] = read_bw(bw_a);
+        tbw[r] = triad_bw(bw_a, bw_b, bw_c, BW_DOUBLES / 4);
+    }
+    const double read_peak = median(rbw, 5), triad_peak = median(tbw, 5);
+    printf("\nMemory bandwidth, one core (median of 5): read (sum of 256 MB) %.1f GB/s, triad (3 x 64 MB, 24 B/element) %.1f GB/s\n",
+           read_peak * 1e-9, triad_peak * 1e-9);
+    if (csv) {
+        fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw\n");
+        fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f\n", read_peak * 1e-9, triad_peak * 1e-9);
+    }
+
+    const char *mname[3] = {"trilinear", "Taylor", "Hermite"};
+    double hermite8[2] = {0, 0}; /* SIMD s/vertex, lmax 8: L2, DRAM */
+    const int lmaxes[3] = {0, 4, 8};
+    printf("\n## Interpolation, one core: SIMD kernel (%s) vs scalar reference\n\n", isa);
+    printf("Chunks of %d vertices per call (the output, %d x 3 nc doubles, stays in cache).  L2: 4^3-node grid;\n"
+           "DRAM: 48^3 (lmax 0, 4) or 32^3 (lmax 8) nodes, 127-133 MB at lmax 4-8, vertices in random order.\n"
+           "bytes/vertex: grid data read (8 corners); GB/s = bytes/vertex x vertices/s; of read: / read bandwidth above.\n\n",
+           CHUNK, CHUNK);
+    printf("| lmax | method | grid | reference ns/vertex | SIMD ns/vertex | speed-up | SIMD Mvertices/s | bytes/vertex | GB/s | of read BW |\n");
+    printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    double *out = xmalloc(sizeof(double) * CHUNK * 3 * SHL_NCOEFFS(8) * 64);
+    for (int li = 0; li < 3; ++li) {
+        const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
+        shl_ctx *ctx, *ctx_ref;
+        must(shl_ctx_create(lmax, &ctx), "ctx");
+        setenv("SHLIGHT_ISA", "scalar", 1);
+        must(shl_ctx_create(lmax, &ctx_ref), "ctx");
+        unsetenv("SHLIGHT_ISA");
+        for (int big = 0; big <= 1; ++big) {
+            const int res = big ? (lmax == 8 ? 32 : 48) : 4;
+            shl_grid *g = make_grid(ctx, res), *gr = make_grid(ctx_ref, res);
+            for (int m = 0; m < 3; ++m) {
+                /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
+                job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out}, jr = js;
+                jr.g = gr;
+                const long reps = big ? 1 : (lmax == 0 ? 400 : lmax == 4 ? 100 : 40);
+                double ts[ROUNDS], tr[ROUNDS], sp[ROUNDS];
+                run(&js);
+                run(&jr);
+                for (int r = 0; r < ROUNDS; ++r) {
+                    ts[r] = tr[r] = 0.0;
+                    for (long q = 0; q < reps; ++q) {
+                        ts[r] += run(&js) / reps;
+                        tr[r] += run(&jr) / reps;
+                    }
+                    sp[r] = tr[r] / ts[r];
+                }
+                const double ms = median(ts, ROUNDS), mr = median(tr, ROUNDS), msp = median(sp, ROUNDS);
+                const double bpv = bytes_per_vertex(m, nc), gbs = bpv / ms;
+                if (lmax == 8 && m == SHL_INTERP_HERMITE) hermite8[big] = ms;
+                char share[32] = "-"; /* a share of DRAM bandwidth means nothing for an L2-resident grid */
+                if (big) snprintf(share, sizeof share, "**%.0f%%**", 100.0 * gbs / read_peak);
+                printf("| %d | %s | %s | %.1f | %.1f | **%.2fx** | %.2f | %.0f | %.1f | %s |\n", lmax, mname[m],
+                       big ? "DRAM" : "L2", mr * 1e9, ms * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, share);
+                if (csv)
+                    fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f\n", lmax, mname[m], big ? "dram" : "l2",
+                            isa, ms * 1e9, mr * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, gbs / read_peak);
+            }
+            shl_grid_destroy(g);
+            shl_grid_destroy(gr);
+        }
+        shl_ctx_destroy(ctx);
+        shl_ctx_destroy(ctx_ref);
+    }
+
+    printf("\n## Hermite interpolation, 2 threads vs 1 (SIMD kernel; calls of 8192 vertices, outputs not reused)\n\n");
+    printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up |\n|---|---|---|---|---|\n");
+    double *big_out = xmalloc(sizeof(double) * 8192 * 3 * SHL_NCOEFFS(8));
+    for (int li = 1; li < 3; ++li) {
+        const int lmax = lmaxes[li];
+        shl_ctx *ctx;
+        must(shl_ctx_create(lmax, &ctx), "ctx");
+        for (int big = 0; big <= 1; ++big) {
+            shl_grid *g = make_grid(ctx, big ? (lmax == 8 ? 32 : 48) : 4);
+            job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out}, j2 = j1;
+            j2.nthreads = 2;
+            double t1[ROUNDS], t2[ROUNDS], sp[ROUNDS];
+            run(&j1);
+            run(&j2);
+            for (int r = 0; r < ROUNDS; ++r) {
+                t1[r] = run(&j1);
+                t2[r] = run(&j2);
+                sp[r] = t1[r] / t2[r];
+            }
+            const double m1 = median(t1, ROUNDS), m2 = median(t2, ROUNDS), msp = median(sp, ROUNDS);
+            printf("| %d | %s | %.1f | %.1f | **%.2fx** |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp);
+            if (csv) fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp);
+            shl_grid_destroy(g);
+        }
+        shl_ctx_destroy(ctx);
+    }
+    printf("\nMedians over %d rounds; in each round both variants are timed under the same load and the\n"
+           "speed-ups are ratios within the round.\n", ROUNDS);
+
+    /* The papers' GPU throughput, implied by their frame and stage times (constants below),
+     * next to this run's per-core rates: different hardware, different work per frame. */
+    const double quad8 = polygon_batch_time(4, 0, pts), tri8g = polygon_batch_time(3, 1, pts);
+    /* Wang 2018 Sec. 6 / Table 2: plant, 163K triangles, one rectangle light, lmax 8, 350 fps
+     * (whole frame) on a GTX 1080 Ti; a closed triangle mesh has about half as many vertices. */
+    const double wang = 163e3 / 2 * 350.0;
+    /* Wu 2020 Table 1 (RTX 2080 Ti, lmax 8, 8^3 grid): Dragon & Bunny, 723 lights: coefficients
+     * and gradients at 512 nodes x 723 lights in 20.2 ms; Hermite interpolation at the vertices
+     * of 1.28M triangles (about 640K vertices, V ~ T/2) in 6.6 ms; Asian Dragon: 1.42M triangles
+     * in 8.1 ms. */
+    const double wu_grid = 512.0 * 723 / 20.2e-3, wu_interp = 1.28e6 / 2 / 6.6e-3, wu_interp2 = 1.42e6 / 2 / 8.1e-3;
+    printf("\n## Throughput next to the papers' GPUs (different hardware: their rates are whole GPUs, ours one CPU core)\n\n");
+    printf("| work (lmax 8) | paper: GPU, source | paper M/s | this run: benchmark | ours M/s per core |\n|---|---|---|---|---|\n");
+    printf("| polygon coefficients per shading point | GTX 1080 Ti, Wang 2018 Table 2 (plant: 163K tris ~ 82K vertices x 350 fps, whole frame) | %.1f | shl_polygon_batch_f, square, %s | %.2f |\n",
+           wang * 1e-6, isa, 1e-6 / quad8);
+    printf("| polygon coefficients + gradients | RTX 2080 Ti, Wu 2020 Table 1 (Dragon & Bunny: 512 nodes x 723 lights in 20.2 ms) | %.1f | shl_polygon_batch_f with gradients, triangle, %s | %.2f |\n",
+           wu_grid * 1e-6, isa, 1e-6 / tri8g);
+    printf("| Hermite interpolation per vertex | RTX 2080 Ti, Wu 2020 Table 1 (Dragon & Bunny ~640K vertices in 6.6 ms; Asian Dragon ~710K in 8.1 ms) | %.0f, %.0f | shl_grid_interp Hermite, float grid, %s: L2-resident / DRAM random | %.2f / %.2f |\n",
+           wu_interp * 1e-6, wu_interp2 * 1e-6, isa, 1e-6 / hermite8[0], 1e-6 / hermite8[1]);
+    if (csv) {
+        fprintf(csv, "papers,8,polygon,wang2018_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wang * 1e-6, 1e-6 / quad8);
+        fprintf(csv, "papers,8,polygon_grad,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wu_grid * 1e-6, 1e-6 / tri8g);
+        fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
+    }
+    printf("\n(checksum %g)\n", (double)bench_sink);
+    if (csv) fclose(csv);
+    free(pts);
+    free(out);
+    free(big_out);
+    free(bw_a);
+    free(bw_b);
+    free(bw_c);
+    shl_ctx_destroy(probe);
+    return 0;
+}

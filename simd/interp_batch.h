@@ -1,0 +1,122 @@
+/* Grid interpolation (Wu et al. 2020 Alg. 1 lines 9-16) from float node
+ * storage, vectorized ACROSS COEFFICIENTS: one point at a time, each vector
+ * holds VL consecutive coefficients k of one colour channel, so every load of
+ * a corner's node data is contiguous.  The per-point set-up (cell, weights) is
+ * computed once in double by src/interp.c and broadcast; the node data are
+ * widened to double as they are loaded and the sums run in double FMAs, as in
+ * the reference (float sums, measured 1.3-2x faster for Hermite, lost the
+ * reference's guarantees: see README "Grid interpolation").  Written once
+ * with the verbs of <isa>/helper.h and compiled for the vector ISAs only
+ * (simd/<isa>/interp_batch_<isa>.c): the scalar table runs the readable
+ * double reference, src/interp_kernel.h, whose formulas and comments this
+ * file follows line by line.
+ *
+ * Blocks: a row of n >= VL coefficients is covered by blocks at k = 0, VL, ...
+ * and a last block at n - VL, which overlaps the previous one and rewrites the
+ * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient) run
+ * the reference: a zero-padded copy measured 4-8x slower than it
+ * (bench/bench_interp.c, lmax 0). */
+#include "batch.h"
+
+#define VL SHL_VDLEN
+#define ISA(name) SHL_ISA_SUFFIX(name)
+
+/* The point's weights (shl__interp_point), broadcast. */
+typedef struct {
+    vd w[8], wd[8][3];   /* trilinear / Taylor: w_j, w_j (p - p_j) */
+    vd hw[3][4];         /* Hermite basis per axis */
+    vd ux, vx, uy, vy;   /* u and 1 - u along x and y */
+} weights;
+
+static void broadcast(const shl__interp_point *s, weights *W)
+{
+    for (int j = 0; j < 8; ++j) {
+        W->w[j] = vd_set1(s->w[j]);
+        for (int a = 0; a < 3; ++a) W->wd[j][a] = vd_set1(s->wd[j][a]);
+    }
+    for (int a = 0; a < 3; ++a)
+        for (int i = 0; i < 4; ++i) W->hw[a][i] = vd_set1(s->hw[a][i]);
+    W->ux = vd_set1(s->u[0]);
+    W->vx = vd_set1(1.0 - s->u[0]);
+    W->uy = vd_set1(s->u[1]);
+    W->vy = vd_set1(1.0 - s->u[1]);
+}
+
+/* Start of the block after k in a row of n >= VL: the last one ends at n. */
+static inline int block_start(int k, int n) { return k + VL <= n ? k : n - VL; }
+
+/* Trilinear: out[i] = sum_j w_j f_j[i] over the 3 nc values (one contiguous row). */
+static void trilinear(const float *const f[8], const weights *W, int nc, double *out)
+{
+    const int n = 3 * nc;
+    for (int k = 0; k < n; k += VL) {
+        const int i = block_start(k, n);
+        vd v = vd_mul(W->w[0], vd_load_float(f[0] + i));
+        for (int j = 1; j < 8; ++j) v = vd_fma(W->w[j], vd_load_float(f[j] + i), v);
+        vd_store(out + i, v);
+    }
+}
+
+/* Annen 2004 Eq. (15): sum_j w_j (c_j + grad c_j . d_j), per channel. */
+static void taylor(const float *const f[8], const weights *W, int nc, double *out)
+{
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < nc; k += VL) {
+            const int i = block_start(k, nc);
+            const size_t vo = (size_t)c * nc + i, go = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
+            vd o = vd_set1(0.0f);
+            for (int j = 0; j < 8; ++j) {
+                o = vd_fma(W->w[j], vd_load_float(f[j] + vo), o);
+                o = vd_fma(W->wd[j][0], vd_load_float(f[j] + go), o);
+                o = vd_fma(W->wd[j][1], vd_load_float(f[j] + go + nc), o);
+                o = vd_fma(W->wd[j][2], vd_load_float(f[j] + go + 2 * (size_t)nc), o);
+            }
+            vd_store(out + vo, o);
+        }
+}
+
+/* Wu 2020 Alg. 4 per channel: along x (lines 4-7), y (lines 8-11), z (line 12). */
+static void hermite(const float *const f[8], const weights *W, int nc, double *out)
+{
+    const vd x0 = W->hw[0][0], x1 = W->hw[0][1], x2 = W->hw[0][2], x3 = W->hw[0][3];
+    const vd y0 = W->hw[1][0], y1 = W->hw[1][1], y2 = W->hw[1][2], y3 = W->hw[1][3];
+    const vd z0 = W->hw[2][0], z1 = W->hw[2][1], z2 = W->hw[2][2], z3 = W->hw[2][3];
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < nc; k += VL) {
+            const int i = block_start(k, nc);
+            const size_t vo = (size_t)c * nc + i, gxo = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
+            const size_t gyo = gxo + nc, gzo = gxo + 2 * (size_t)nc;
+            vd g[4], g_y[4], g_z[4];
+            for (int q = 0; q < 4; ++q) { /* lines 4-7: along x, corners 2q and 2q+1 */
+                const float *a = f[2 * q], *b = f[2 * q + 1];
+                g[q] = vd_fma(x0, vd_load_float(a + vo),
+                              vd_fma(x1, vd_load_float(a + gxo), vd_fma(x2, vd_load_float(b + vo), vd_mul(x3, vd_load_float(b + gxo)))));
+                g_y[q] = vd_fma(W->vx, vd_load_float(a + gyo), vd_mul(W->ux, vd_load_float(b + gyo)));
+                g_z[q] = vd_fma(W->vx, vd_load_float(a + gzo), vd_mul(W->ux, vd_load_float(b + gzo)));
+            }
+            /* lines 8-11: along y; line 12: along z */
+            const vd h0 = vd_fma(y0, g[0], vd_fma(y1, g_y[0], vd_fma(y2, g[1], vd_mul(y3, g_y[1]))));
+            const vd h1 = vd_fma(y0, g[2], vd_fma(y1, g_y[2], vd_fma(y2, g[3], vd_mul(y3, g_y[3]))));
+            const vd h0_z = vd_fma(W->vy, g_z[0], vd_mul(W->uy, g_z[1]));
+            const vd h1_z = vd_fma(W->vy, g_z[2], vd_mul(W->uy, g_z[3]));
+            vd_store(out + vo, vd_fma(z0, h0, vd_fma(z1, h0_z, vd_fma(z2, h1, vd_mul(z3, h1_z)))));
+        }
+}
+
+void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+{
+    if (nc < VL) { /* rows shorter than a vector: nothing to vectorize */
+        shl__interp_ref_f(data, method, nc, s, out);
+        return;
+    }
+    const float *f[8];
+    for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
+    weights W;
+    broadcast(s, &W);
+    if (method == SHL_INTERP_TRILINEAR)
+        trilinear(f, &W, nc, out);
+    else if (method == SHL_INTERP_TAYLOR)
+        taylor(f, &W, nc, out);
+    else
+        hermite(f, &W, nc, out);
+}
