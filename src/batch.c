@@ -32,7 +32,7 @@ static void prepare(const float *verts, int n, shl__batch_poly *P)
     for (int i = 1; i < m; ++i)
         for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs((double)kept[3 * i + k] - kept[k]));
     if (!(ext > 0.0)) return; /* vertices equal up to the sign of zero: zero area */
-    P->inv_scale = ldexp(1.0, -ilogb(ext)); /* extent in [1, 2) after scaling */
+    P->inv_scale = shl__ldexp(1.0, -shl__ilogb(ext)); /* extent in [1, 2) after scaling */
     for (int i = 0; i < m; ++i)
         for (int k = 0; k < 3; ++k) P->vd[i][k] = kept[3 * i + k] * P->inv_scale;
     double normal[3] = {0.0, 0.0, 0.0}, c[SHL_MAX_VERTS][3]; /* Newell, relative to v_0 */

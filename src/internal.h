@@ -6,6 +6,8 @@
 #include <limits.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
+#include <string.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -38,31 +40,50 @@ void shl__sh_eval(int lmax, double x, double y, double z, double *out);
 int shl__check_finite(const double *v, int count);
 int shl__check_finite_f(const float *v, int count);
 
+/* ilogb and ldexp without a libm call where the operands are normal doubles
+ * (the scaled-geometry set-up below calls them per vertex and component);
+ * results identical to libm's: 2^e is exact, and d 2^e is rounded once. */
+static inline int shl__ilogb(double d)
+{
+    uint64_t bits;
+    memcpy(&bits, &d, sizeof bits);
+    const int biased = (int)((bits >> 52) & 0x7ff);
+    return biased != 0 && biased != 0x7ff ? biased - 1023 : ilogb(d);
+}
+static inline double shl__ldexp(double d, int e)
+{
+    if (e < -1022 || e > 1023) return ldexp(d, e);
+    const uint64_t bits = (uint64_t)(e + 1023) << 52; /* 2^e, a normal double */
+    double p;
+    memcpy(&p, &bits, sizeof p);
+    return d * p;
+}
+
 /* Geometry in scaled units (README, "Numerical contract"): differences of
  * coordinates are multiplied by a power of two 2^-E that brings the largest near
  * 1, so that no product of distances over- or underflows; results that are
  * ratios of lengths are unchanged (bit for bit when the unscaled arithmetic
  * does not over/underflow), and d/dx = 2^-E d/dx_scaled.
- * ilogb(a - b), or INT_MIN when a == b; a - b may overflow: then both |a|, |b|
+ * shl__ilogb(a - b), or INT_MIN when a == b; a - b may overflow: then both |a|, |b|
  * exceed 2^969 and their halves are exact. */
 static inline int shl__ilogb_diff(double a, double b)
 {
     const double d = a - b;
     if (d == 0.0) return INT_MIN;
-    return isinf(d) ? ilogb(0.5 * a - 0.5 * b) + 1 : ilogb(d);
+    return isinf(d) ? shl__ilogb(0.5 * a - 0.5 * b) + 1 : shl__ilogb(d);
 }
 /* (a - b) 2^e, rounded once, as if the exponent range were unbounded (up to underflow). */
 static inline double shl__diff_scaled(double a, double b, int e)
 {
     const double d = a - b;
-    return isinf(d) ? ldexp(0.5 * a - 0.5 * b, e + 1) : ldexp(d, e);
+    return isinf(d) ? shl__ldexp(0.5 * a - 0.5 * b, e + 1) : shl__ldexp(d, e);
 }
 /* 2^e as a product s[0] s[1] of two doubles (|e| <= 2200): multiplying by both
  * in turn rounds only where the final result underflows or overflows. */
 static inline void shl__pow2_split(int e, double s[2])
 {
-    s[0] = ldexp(1.0, e / 2);
-    s[1] = ldexp(1.0, e - e / 2);
+    s[0] = shl__ldexp(1.0, e / 2);
+    s[1] = shl__ldexp(1.0, e - e / 2);
 }
 
 #endif

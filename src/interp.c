@@ -55,8 +55,8 @@ static void taylor_weights(const shl_grid *g, double b, point_setup *s)
     double d[8][3], dist[8], dmin = INFINITY, sum = 0.0;
     /* distances in units of 2^e, the largest spacing in [2^e, 2^(e+1)) (h > 0: shl_grid_create):
      * the weights are ratios, and squares of huge or tiny cells would over/underflow */
-    const int e = ilogb(fmax(g->h[0], fmax(g->h[1], g->h[2])));
-    const double hs[3] = {ldexp(g->h[0], -e), ldexp(g->h[1], -e), ldexp(g->h[2], -e)};
+    const int e = shl__ilogb(fmax(g->h[0], fmax(g->h[1], g->h[2])));
+    const double hs[3] = {shl__ldexp(g->h[0], -e), shl__ldexp(g->h[1], -e), shl__ldexp(g->h[2], -e)};
     for (int j = 0; j < 8; ++j) {
         double ds[3];
         for (int a = 0; a < 3; ++a) {

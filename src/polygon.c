@@ -23,13 +23,15 @@ static inline int imax(int a, int b) { return a > b ? a : b; }
 
 /* |v|, scaled by a power of two first: v . v may underflow when v is tiny (a cross
  * product of a short edge: its length feeds gamma and mu, Wang 2018 Eq. 19-20) */
-static double norm3(const double v[3])
+static inline double norm3(const double v[3])
 {
-    const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    const double a0 = fabs(v[0]), a1 = fabs(v[1]), a2 = fabs(v[2]);
+    const double m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
     if (!(m > 0.0)) return 0.0;
-    const int e = ilogb(m);
-    const double s[3] = {ldexp(v[0], -e), ldexp(v[1], -e), ldexp(v[2], -e)};
-    return ldexp(sqrt(dot3(s, s)), e);
+    if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(dot3(v, v)); /* v . v in range: no scaling needed */
+    const int e = shl__ilogb(m);
+    const double s[3] = {shl__ldexp(v[0], -e), shl__ldexp(v[1], -e), shl__ldexp(v[2], -e)};
+    return shl__ldexp(sqrt(dot3(s, s)), e);
 }
 
 /* (a - b) 2^e per component (internal.h) */

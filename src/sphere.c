@@ -29,7 +29,7 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
      * no overflow in the difference, no overflow or underflow in the norm */
     const double vs[3] = {shl__diff_scaled(center[0], x[0], -e), shl__diff_scaled(center[1], x[1], -e),
                           shl__diff_scaled(center[2], x[2], -e)};
-    const double ds = sqrt(shl__dot3(vs, vs)), rs = ldexp(radius, -e);
+    const double ds = sqrt(shl__dot3(vs, vs)), rs = shl__ldexp(radius, -e);
     if (ds <= rs) return;
     g->inside = 0;
     for (int k = 0; k < 3; ++k) g->u[k] = vs[k] / ds;
