@@ -83,8 +83,8 @@ static int float_unresolved(const shl__batch_poly *P, const float *pt)
     for (int i = 0; i < P->n; ++i) {
         const double d[3] = {P->vd[i][0] - x[0], P->vd[i][1] - x[1], P->vd[i][2] - x[2]};
         const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        rmax2 = fmax(rmax2, d2);
-        rmin2 = fmin(rmin2, d2);
+        rmax2 = d2 > rmax2 ? d2 : rmax2; /* finite input: no NaN, so no libm fmax/fmin calls */
+        rmin2 = d2 < rmin2 ? d2 : rmin2;
     }
     const double h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
                      P->normal[2] * (P->vd[0][2] - x[2]);
