@@ -20,18 +20,6 @@
 
 enum { CHUNK = 128, NPTS = 1 << 16, ROUNDS = 11 };
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 static void *xmalloc(size_t n)
 {
     void *p = malloc(n);
@@ -156,7 +144,7 @@ static double polygon_batch_time(int n, int with_grad, const double *pts)
     }
     bench_sink += out[1];
     shl_ctx_destroy(ctx);
-    return median(t, ROUNDS);
+    return bench_median(t, ROUNDS);
 }
 
 int main(int argc, char **argv)
@@ -183,7 +171,7 @@ int main(int argc, char **argv)
         rbw[r] = read_bw(bw_a);
         tbw[r] = triad_bw(bw_a, bw_b, bw_c, BW_DOUBLES / 4);
     }
-    const double read_peak = median(rbw, 5), triad_peak = median(tbw, 5);
+    const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5);
     printf("\nMemory bandwidth, one core (median of 5): read (sum of 256 MB) %.1f GB/s, triad (3 x 64 MB, 24 B/element) %.1f GB/s\n",
            read_peak * 1e-9, triad_peak * 1e-9);
     if (csv) {
@@ -228,7 +216,7 @@ int main(int argc, char **argv)
                     }
                     sp[r] = tr[r] / ts[r];
                 }
-                const double ms = median(ts, ROUNDS), mr = median(tr, ROUNDS), msp = median(sp, ROUNDS);
+                const double ms = bench_median(ts, ROUNDS), mr = bench_median(tr, ROUNDS), msp = bench_median(sp, ROUNDS);
                 const double bpv = bytes_per_vertex(m, nc), gbs = bpv / ms;
                 if (lmax == 8 && m == SHL_INTERP_HERMITE) hermite8[big] = ms;
                 char share[32] = "-"; /* a share of DRAM bandwidth means nothing for an L2-resident grid */
@@ -265,7 +253,7 @@ int main(int argc, char **argv)
                 t2[r] = run(&j2);
                 sp[r] = t1[r] / t2[r];
             }
-            const double m1 = median(t1, ROUNDS), m2 = median(t2, ROUNDS), msp = median(sp, ROUNDS);
+            const double m1 = bench_median(t1, ROUNDS), m2 = bench_median(t2, ROUNDS), msp = bench_median(sp, ROUNDS);
             printf("| %d | %s | %.1f | %.1f | **%.2fx** |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp);
             if (csv) fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp);
             shl_grid_destroy(g);

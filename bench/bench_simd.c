@@ -110,18 +110,6 @@ static double once(void (*fn)(void *), job *j)
     return (bench_now() - t0) / (double)j->inner;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* Floating-point operations of one evaluation, counted from simd/poly_batch.h as
  * executed (add, sub, mul, div, sqrt: 1; FMA: 2; min, max, abs, sign, select: 0)
  * for a convex polygon of n vertices.  Geometry: 13 per vertex, 107 per edge
@@ -267,8 +255,8 @@ int main(int argc, char **argv)
 #endif
                 frac[r] = pk[r] > 0 ? rate[r] / pk[r] : 0.0;
             }
-            const double mb = median(tb, ROUNDS), md = median(td, ROUNDS), ms = median(ts, ROUNDS), mf = median(tf, ROUNDS);
-            const double msp = median(speed, ROUNDS), mr = median(rate, ROUNDS), mp = median(pk, ROUNDS), mfr = median(frac, ROUNDS);
+            const double mb = bench_median(tb, ROUNDS), md = bench_median(td, ROUNDS), ms = bench_median(ts, ROUNDS), mf = bench_median(tf, ROUNDS);
+            const double msp = bench_median(speed, ROUNDS), mr = bench_median(rate, ROUNDS), mp = bench_median(pk, ROUNDS), mfr = bench_median(frac, ROUNDS);
             printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f | %.0f | %.1f | %.1f | **%.0f%%** |\n", lmax, md * 1e9,
                    mb * 1e9, msp, ms * 1e9, mf * 1e9, flops, mr * 1e-9, mp * 1e-9, 100.0 * mfr);
             if (csv)
@@ -313,8 +301,8 @@ int main(int argc, char **argv)
                 tf[r] = once(run_sphere_float, &jf);
                 speed[r] = td[r] / tb[r];
             }
-            const double mb = median(tb, ROUNDS), md = median(td, ROUNDS), ms = median(ts, ROUNDS), mf = median(tf, ROUNDS);
-            const double msp = median(speed, ROUNDS);
+            const double mb = bench_median(tb, ROUNDS), md = bench_median(td, ROUNDS), ms = bench_median(ts, ROUNDS), mf = bench_median(tf, ROUNDS);
+            const double msp = bench_median(speed, ROUNDS);
             printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f |\n", lmax, md * 1e9, mb * 1e9, msp, ms * 1e9, mf * 1e9);
             if (csv)
                 fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,,,,\n", with_grad, lmax, isa, mb * 1e9, md * 1e9, msp, ms * 1e9,

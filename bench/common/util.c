@@ -23,6 +23,12 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+double bench_median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 bench_time bench_run(void (*fn)(void *), void *arg, long inner, int reps)
 {
     double t[64];
@@ -33,8 +39,8 @@ bench_time bench_run(void (*fn)(void *), void *arg, long inner, int reps)
         fn(arg);
         t[r] = (bench_now() - t0) / (double)inner;
     }
-    qsort(t, (size_t)reps, sizeof t[0], cmp_double);
-    bench_time out = {t[0], reps % 2 ? t[reps / 2] : 0.5 * (t[reps / 2 - 1] + t[reps / 2])};
+    const double median = bench_median(t, reps); /* sorts t */
+    bench_time out = {t[0], median};
     return out;
 }
 

@@ -15,6 +15,9 @@ typedef struct {
  * `reps` timed calls; returns seconds per evaluation. */
 bench_time bench_run(void (*fn)(void *), void *arg, long inner, int reps);
 
+/* Median of v[0..n-1] (sorts v in place). */
+double bench_median(double *v, int n);
+
 /* Choose an inner count so that one timed call takes about target seconds. */
 long bench_calibrate(void (*fn_one)(void *), void *arg, double target);
 
