@@ -184,6 +184,62 @@ static void fma_peak(void *p)
 #define PEAK_FLOPS_PER_ITER (FMA_CHAINS * 4 * 2)
 #endif
 
+/* The four variants of one light kind: batch kernel (context's ISA, and the
+ * same kernel with SHLIGHT_ISA=scalar), scalar double and float single-point loops. */
+typedef struct {
+    void (*batch)(void *), (*scalar_double)(void *), (*scalar_float)(void *);
+} variants;
+
+typedef struct {
+    double batch, scalar_double, batch_scalar_isa, scalar_float; /* seconds per evaluation */
+    double speedup, gflops, peak_gflops, peak_fraction;          /* medians of within-round ratios */
+} timing;
+
+/* ROUNDS rounds at lmax, each timing every variant once (and the FMA peak loop
+ * when peak != NULL), so that the ratios compare calls made under the same load.
+ * flops: per evaluation of the batch kernel (0: no rate reported). */
+static timing time_variants(const variants *v, const job *base, int lmax, int with_grad, float *grad, double *gradd,
+                            double flops, job *peak)
+{
+    enum { ROUNDS = 15 };
+    shl_ctx *ctx, *ctx_scalar;
+    shl_ctx_create(lmax, &ctx);
+    setenv("SHLIGHT_ISA", "scalar", 1);
+    shl_ctx_create(lmax, &ctx_scalar);
+    unsetenv("SHLIGHT_ISA");
+    job jb = *base, jd = *base, js = *base, jf = *base;
+    jb.ctx = jd.ctx = jf.ctx = ctx;
+    js.ctx = ctx_scalar;
+    jb.grad = js.grad = jf.grad = with_grad ? grad : NULL;
+    jd.gradd = with_grad ? gradd : NULL;
+    calibrate(v->batch, &jb, NPTS);
+    calibrate(v->batch, &js, NPTS);
+    calibrate(v->scalar_double, &jd, 64);
+    calibrate(v->scalar_float, &jf, 64);
+    double tb[ROUNDS], td[ROUNDS], ts[ROUNDS], tf[ROUNDS], speed[ROUNDS], rate[ROUNDS], pk[ROUNDS], frac[ROUNDS];
+    for (int r = 0; r < ROUNDS; ++r) {
+        tb[r] = once(v->batch, &jb);
+        td[r] = once(v->scalar_double, &jd);
+        ts[r] = once(v->batch, &js);
+        tf[r] = once(v->scalar_float, &jf);
+        speed[r] = td[r] / tb[r];
+        rate[r] = flops / tb[r];
+        pk[r] = 0.0;
+#ifdef PEAK_ISA
+        if (peak) pk[r] = (double)PEAK_FLOPS_PER_ITER / once(fma_peak, peak);
+#else
+        (void)peak;
+#endif
+        frac[r] = pk[r] > 0 ? rate[r] / pk[r] : 0.0;
+    }
+    shl_ctx_destroy(ctx);
+    shl_ctx_destroy(ctx_scalar);
+    const timing t = {bench_median(tb, ROUNDS), bench_median(td, ROUNDS),   bench_median(ts, ROUNDS),
+                      bench_median(tf, ROUNDS), bench_median(speed, ROUNDS), 1e-9 * bench_median(rate, ROUNDS),
+                      1e-9 * bench_median(pk, ROUNDS), bench_median(frac, ROUNDS)};
+    return t;
+}
+
 int main(int argc, char **argv)
 {
     const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_simd.csv";
@@ -214,6 +270,8 @@ int main(int argc, char **argv)
 #ifdef PEAK_ISA
     printf("peak: %d independent %s FMA chains in registers, measured in every round\n", FMA_CHAINS, PEAK_ISA);
 #endif
+    const variants polygon = {run_batch, run_scalar_double, run_scalar_float};
+    const variants sphere = {run_sphere_batch, run_sphere_double, run_sphere_float};
     if (csv) fprintf(csv, "grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,flops,gflops,peak_gflops,peak_fraction\n");
 
     for (int with_grad = 0; with_grad <= 1; ++with_grad) {
@@ -223,47 +281,15 @@ int main(int argc, char **argv)
                "| GFLOP/s | peak GFLOP/s | of peak |\n", isa);
         printf("|---|---|---|---|---|---|---|---|---|---|\n");
         for (int lmax = 2; lmax <= 14; lmax += 2) {
-            shl_ctx *ctx, *ctx_scalar;
-            shl_ctx_create(lmax, &ctx);
-            setenv("SHLIGHT_ISA", "scalar", 1);
-            shl_ctx_create(lmax, &ctx_scalar);
-            unsetenv("SHLIGHT_ISA");
-            job jb = j, jd = j, js = j, jf = j;
-            jb.ctx = jd.ctx = jf.ctx = ctx;
-            js.ctx = ctx_scalar;
-            jb.grad = js.grad = jf.grad = with_grad ? grad : NULL;
-            jd.gradd = with_grad ? gradd : NULL;
-            calibrate(run_batch, &jb, NPTS);
-            calibrate(run_batch, &js, NPTS);
-            calibrate(run_scalar_double, &jd, 64);
-            calibrate(run_scalar_float, &jf, 64);
-            /* ROUNDS rounds, each timing every variant once (and the peak), so that
-             * the ratios compare calls made under the same load */
-            enum { ROUNDS = 15 };
-            double tb[ROUNDS], td[ROUNDS], ts[ROUNDS], tf[ROUNDS], speed[ROUNDS], rate[ROUNDS], pk[ROUNDS], frac[ROUNDS];
             const double flops = kernel_flops(lmax, NV, with_grad);
-            for (int r = 0; r < ROUNDS; ++r) {
-                tb[r] = once(run_batch, &jb);
-                td[r] = once(run_scalar_double, &jd);
-                ts[r] = once(run_batch, &js);
-                tf[r] = once(run_scalar_float, &jf);
-                speed[r] = td[r] / tb[r];
-                rate[r] = flops / tb[r];
-                pk[r] = 0.0;
-#ifdef PEAK_ISA
-                pk[r] = (double)PEAK_FLOPS_PER_ITER / once(fma_peak, &jp);
-#endif
-                frac[r] = pk[r] > 0 ? rate[r] / pk[r] : 0.0;
-            }
-            const double mb = bench_median(tb, ROUNDS), md = bench_median(td, ROUNDS), ms = bench_median(ts, ROUNDS), mf = bench_median(tf, ROUNDS);
-            const double msp = bench_median(speed, ROUNDS), mr = bench_median(rate, ROUNDS), mp = bench_median(pk, ROUNDS), mfr = bench_median(frac, ROUNDS);
-            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f | %.0f | %.1f | %.1f | **%.0f%%** |\n", lmax, md * 1e9,
-                   mb * 1e9, msp, ms * 1e9, mf * 1e9, flops, mr * 1e-9, mp * 1e-9, 100.0 * mfr);
+            const timing t = time_variants(&polygon, &j, lmax, with_grad, grad, gradd, flops, &jp);
+            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f | %.0f | %.1f | %.1f | **%.0f%%** |\n", lmax,
+                   t.scalar_double * 1e9, t.batch * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9, flops,
+                   t.gflops, t.peak_gflops, 100.0 * t.peak_fraction);
             if (csv)
-                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,%.0f,%.2f,%.2f,%.3f\n", with_grad, lmax, isa, mb * 1e9,
-                        md * 1e9, msp, ms * 1e9, mf * 1e9, flops, mr * 1e-9, mp * 1e-9, mfr);
-            shl_ctx_destroy(ctx);
-            shl_ctx_destroy(ctx_scalar);
+                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,%.0f,%.2f,%.2f,%.3f\n", with_grad, lmax, isa, t.batch * 1e9,
+                        t.scalar_double * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9, flops, t.gflops,
+                        t.peak_gflops, t.peak_fraction);
         }
     }
     printf("\nMedians over 15 rounds; in each round every variant is timed once (calls of ~10 ms) and\n"
@@ -278,37 +304,12 @@ int main(int argc, char **argv)
         printf("| lmax | scalar double ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | scalar float ns |\n", isa);
         printf("|---|---|---|---|---|---|\n");
         for (int lmax = 2; lmax <= 14; lmax += 2) {
-            shl_ctx *ctx, *ctx_scalar;
-            shl_ctx_create(lmax, &ctx);
-            setenv("SHLIGHT_ISA", "scalar", 1);
-            shl_ctx_create(lmax, &ctx_scalar);
-            unsetenv("SHLIGHT_ISA");
-            job jb = j, jd = j, js = j, jf = j;
-            jb.ctx = jd.ctx = jf.ctx = ctx;
-            js.ctx = ctx_scalar;
-            jb.grad = js.grad = jf.grad = with_grad ? grad : NULL;
-            jd.gradd = with_grad ? gradd : NULL;
-            calibrate(run_sphere_batch, &jb, NPTS);
-            calibrate(run_sphere_batch, &js, NPTS);
-            calibrate(run_sphere_double, &jd, 64);
-            calibrate(run_sphere_float, &jf, 64);
-            enum { ROUNDS = 15 };
-            double tb[ROUNDS], td[ROUNDS], ts[ROUNDS], tf[ROUNDS], speed[ROUNDS];
-            for (int r = 0; r < ROUNDS; ++r) {
-                tb[r] = once(run_sphere_batch, &jb);
-                td[r] = once(run_sphere_double, &jd);
-                ts[r] = once(run_sphere_batch, &js);
-                tf[r] = once(run_sphere_float, &jf);
-                speed[r] = td[r] / tb[r];
-            }
-            const double mb = bench_median(tb, ROUNDS), md = bench_median(td, ROUNDS), ms = bench_median(ts, ROUNDS), mf = bench_median(tf, ROUNDS);
-            const double msp = bench_median(speed, ROUNDS);
-            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f |\n", lmax, md * 1e9, mb * 1e9, msp, ms * 1e9, mf * 1e9);
+            const timing t = time_variants(&sphere, &j, lmax, with_grad, grad, gradd, 0.0, NULL);
+            printf("| %d | %.0f | %.1f | **%.1fx** | %.0f | %.0f |\n", lmax, t.scalar_double * 1e9, t.batch * 1e9, t.speedup,
+                   t.batch_scalar_isa * 1e9, t.scalar_float * 1e9);
             if (csv)
-                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,,,,\n", with_grad, lmax, isa, mb * 1e9, md * 1e9, msp, ms * 1e9,
-                        mf * 1e9);
-            shl_ctx_destroy(ctx);
-            shl_ctx_destroy(ctx_scalar);
+                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,,,,\n", with_grad, lmax, isa, t.batch * 1e9,
+                        t.scalar_double * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9);
         }
     }
     printf("\nSphere: medians over 15 rounds, speed-ups within each round, as above.\n");
