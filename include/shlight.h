@@ -456,6 +456,28 @@ int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, 
                        float *coeffs, float *grad);
 
 /**
+ * shl_lights_eval_batch in float through the batch kernels above: the light set
+ * at npts >= 0 points pts[3*p .. 3*p+2]; point p writes rgb + 3*nc*p (3*nc
+ * entries) and, if grad != NULL, grad + 9*nc*p (9*nc entries), layouts of
+ * shl_lights_eval.  Each light is evaluated as by shl_polygon_batch_f /
+ * shl_sphere_batch_f (from its double vertices, centre and radius; a one-sided
+ * polygon reaches a point by the same double test as in shl_lights_eval), times
+ * its rgb rounded to float, and the lights are summed in float; so each light
+ * adds its own float error, scaled by |rgb| (README "Batch evaluation and SIMD").
+ * Lights beyond float's normal range (a polygon coordinate above 2^126 or an
+ * extent below 2^-126; a sphere centre coordinate outside 2^-126..2^126 in
+ * magnitude other than 0, a radius outside 2^-126..2^126) take the scalar float
+ * path (shl_polygon_grad_f, shl_sphere_grad_f: geometry in double) at every
+ * point.  pts and rgb may be NULL when npts is 0; an empty set gives zeros.
+ * Errors, before anything is written: NULL pointers (SHL_ENULL), npts < 0
+ * (SHL_EDOMAIN), a non-finite point (SHL_ENONFINITE); one workspace per call
+ * of the larger kernel workspace + 4 (nq nc + 3) 64 bytes, nq = 4 with
+ * gradients, 1 without (SHL_ENOMEM).
+ */
+int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
+                            float *grad);
+
+/**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with
  * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
  * Chosen at shl_ctx_create: the best one compiled in and supported, unless the

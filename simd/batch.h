@@ -52,6 +52,24 @@ typedef void (*shl__interp_fn)(const float *data, int method, int nc, const shl_
 typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double radius, int npts, const float *pts,
                                      float *coeffs, float *grad, void *work);
 
+/* src/batch.c: the polygon verts[0..3n) (finite doubles) prepared for the
+ * kernel; the kernel over npts points followed by the scalar path for the
+ * points its float geometry cannot resolve (zeros when P->n == 0); and the
+ * scalar float path alone at one point (geometry in double, as shl_polygon_grad_f).
+ * work: poly_work_bytes(lmax, grad != NULL) bytes. */
+void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P);
+void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const double *verts, int n, int npts,
+                          const float *pts, float *coeffs, float *grad, void *work);
+void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const float *pt, float *coeffs,
+                           float *grad);
+
+/* src/sphere_batch.c: the sphere (finite centre, finite radius > 0) at npts
+ * points, outputs as shl_sphere_batch_f; the kernel where its unscaled double
+ * set-up stays in range, else the scalar float path per point.
+ * work: sphere_work_bytes(lmax, grad != NULL) bytes. */
+void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double radius, int npts, const float *pts,
+                            float *coeffs, float *grad, void *work);
+
 /* One table per instruction set, defined in src/dispatch.c (designated
  * initializers, one field per line). */
 struct shl__isa {

@@ -1,7 +1,8 @@
-/* Batched evaluation entry points: argument checks, the polygon prepared once
- * in double (scaled, repeated vertices dropped, plane and fan data), then the
+/* Batched polygon evaluation: argument checks, the polygon prepared once in
+ * double (scaled, repeated vertices dropped, plane and fan data), then the
  * context's SIMD kernel (simd/poly_batch.h) over all points, and the scalar path
- * for the rare points its float geometry cannot resolve. */
+ * for the rare points its float geometry cannot resolve.  Light sets
+ * (src/lights_batch.c) run the same two steps per polygon. */
 #include "../simd/batch.h"
 #include "polygon.h"
 #include <float.h>
@@ -17,20 +18,20 @@ static void cross3(const double a[3], const double b[3], double out[3])
 
 /* Repeated vertices dropped as in shl__poly_geom_init (polygon.c); P->n = 0
  * when fewer than 3 remain or the polygon has zero area. */
-static void prepare(const float *verts, int n, shl__batch_poly *P)
+void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
 {
-    float kept[3 * SHL_MAX_VERTS];
+    double kept[3 * SHL_MAX_VERTS];
     int m = 0;
     for (int i = 0; i < n; ++i) {
-        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(float) * 3) == 0) continue;
-        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(float) * 3);
+        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
+        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(double) * 3);
     }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(float) * 3) == 0) --m;
+    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
     P->n = 0;
     if (m < 3) return;
     double ext = 0.0; /* extent about v_0 */
     for (int i = 1; i < m; ++i)
-        for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs((double)kept[3 * i + k] - kept[k]));
+        for (int k = 0; k < 3; ++k) ext = fmax(ext, fabs(kept[3 * i + k] - kept[k]));
     if (!(ext > 0.0)) return; /* vertices equal up to the sign of zero: zero area */
     P->inv_scale = shl__ldexp(1.0, -shl__ilogb(ext)); /* extent in [1, 2) after scaling */
     for (int i = 0; i < m; ++i)
@@ -93,19 +94,32 @@ static int float_unresolved(const shl__batch_poly *P, const float *pt)
 }
 
 /* Such a point takes the scalar path of shl_polygon_grad_f (geometry in double). */
-static void scalar_point(const shl_ctx *ctx, const float *verts, int n, const float *pt, float *coeffs, float *grad)
+void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const float *pt, float *coeffs, float *grad)
 {
-    double xd[3], vd[3 * SHL_MAX_VERTS];
+    const double xd[3] = {pt[0], pt[1], pt[2]};
     float zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
-    for (int k = 0; k < 3; ++k) xd[k] = pt[k];
-    for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
     shl__poly_geom g;
-    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_geom_init(&g, xd, verts, n);
     shl__poly_zh_grad_f(&g, ctx->lmax, zh, zh_grad); /* coefficients independent of the gradient request */
     shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
     if (!grad) return;
     for (int a = 0; a < 3; ++a) shl__zh_to_sh_f(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
     shl__poly_grad_unscale_f(&g, grad, 3 * ctx->nc);
+}
+
+void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const double *verts, int n, int npts,
+                          const float *pts, float *coeffs, float *grad, void *work)
+{
+    const size_t nc = (size_t)ctx->nc;
+    if (P->n == 0) {
+        memset(coeffs, 0, sizeof(float) * nc * (size_t)npts);
+        if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
+        return;
+    }
+    ctx->isa->poly_batch(P, ctx->lmax, npts, pts, coeffs, grad, work);
+    for (int p = 0; p < npts; ++p)
+        if (float_unresolved(P, pts + 3 * (size_t)p))
+            shl__batch_poly_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
 }
 
 int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
@@ -118,20 +132,13 @@ int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts,
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
+    double vd[3 * SHL_MAX_VERTS];
+    for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
     shl__batch_poly P;
-    prepare(verts, n, &P);
-    const size_t nc = (size_t)ctx->nc;
-    if (P.n == 0) {
-        memset(coeffs, 0, sizeof(float) * nc * (size_t)npts);
-        if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
-        return SHL_OK;
-    }
+    shl__batch_poly_prepare(vd, n, &P);
     void *work = shl__malloc(ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL));
     if (!work) return SHL_ENOMEM;
-    ctx->isa->poly_batch(&P, ctx->lmax, npts, pts, coeffs, grad, work);
+    shl__batch_poly_eval(ctx, &P, vd, n, npts, pts, coeffs, grad, work);
     shl__free(work);
-    for (int p = 0; p < npts; ++p)
-        if (float_unresolved(&P, pts + 3 * (size_t)p))
-            scalar_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
     return SHL_OK;
 }

@@ -17,9 +17,7 @@ static size_t acc_block(int lmax) { return (size_t)(2 * lmax) * SHL__ZH_STRIDE +
 
 size_t shl__lights_ws_size(int lmax) { return 4 * (size_t)SHL__ZH_BLOCK + 12 * acc_block(lmax); }
 
-/* normal . (x - v_0), the difference scaled by a power of two (internal.h): the
- * sign of the unscaled formula wherever that does not over/underflow */
-static double front_distance(const shl__light *li, const double *v0, const double x[3])
+double shl__light_front_distance(const shl__light *li, const double *v0, const double x[3])
 {
     int e = INT_MIN;
     for (int k = 0; k < 3; ++k) {
@@ -101,7 +99,7 @@ static int light_zh(const shl_lights *lights, const shl__light *li, int lmax, co
     switch (li->kind) {
     case SHL__LIGHT_POLYGON: {
         const double *v = lights->verts + li->vofs;
-        if (!li->two_sided && !(front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
+        if (!li->two_sided && !(shl__light_front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
         shl__poly_geom g;
         shl__poly_geom_init(&g, x, v, li->n);
         if (with_grad) {

@@ -25,6 +25,11 @@ struct shl_lights {
     size_t nverts, vcap; /* doubles used / allocated */
 };
 
+/* normal . (x - v_0) of polygon light li (v_0 its first vertex), the difference
+ * scaled by a power of two (internal.h): the sign of the unscaled formula
+ * wherever that does not over/underflow; x receives li (one-sided) iff > 0. */
+double shl__light_front_distance(const shl__light *li, const double *v0, const double x[3]);
+
 /* Doubles of workspace shl__lights_eval needs at lmax. */
 size_t shl__lights_ws_size(int lmax);
 

@@ -1,5 +1,5 @@
 /* libFuzzer target: light sets -- shl_lights_create / add_polygon / add_sphere /
- * count / eval / eval_batch / destroy.
+ * count / eval / eval_batch / eval_batch_f / destroy.
  *
  * Input: lmax byte, flags byte (bit 0: gradients, bit 1: a NaN point in the
  * batch, bit 2: allocation failures, bit 3: NULL arguments), light count, per
@@ -15,11 +15,19 @@
  *    shl_sphere_grad (one-sided polygons: only where n . (x - v_0) > 0, n the
  *    documented Newell normal), to 1e-9 of sum_i |rgb_ic| x (light i's scale):
  *    the set reconstructs accumulated lobe integrals once (reconstruction
- *    condition <= 22.8), test_lights.c measures 1.5e-15;
+ *    condition <= 22.8), test_lights.c measures 1.5e-15; plus sum_i |rgb_ic| 64
+ *    DBL_TRUE_MIN: unit-radiance results that underflow to denormals (a light
+ *    2^1000 extents away) carry an absolute error of a few DBL_TRUE_MIN, which a
+ *    huge rgb magnifies;
  *  - finite outputs whenever sum |rgb| 4 pi K_30 (n for raw polygons) stays
  *    below 1e290 (any coordinates: the geometry is scaled by powers of two);
  *  - with structured polygons and spheres: |rgb_c,lm| <= sum_i |rgb_ic| (K_l
- *    Omega_i + slack_i) (the bounds of fuzz_polygon.c / fuzz_sphere.c). */
+ *    Omega_i + slack_i) (the bounds of fuzz_polygon.c / fuzz_sphere.c);
+ *  - eval_batch_f on the float-rounded points: SHL_ENONFINITE (nothing written)
+ *    iff a rounded point is not finite, SHL_ENOMEM under an allocation failure,
+ *    zeros for an empty set, finite rgb whenever sum |rgb| 4 pi K_30 n stays below
+ *    1e30, and each point's result independent of the batch (equal, bit for
+ *    bit, to a call with that point alone). */
 #include "fuzz_common.h"
 
 enum { MAXL = 6, MAXP = 4 };
@@ -172,6 +180,40 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     FUZZ_CHECK(sb == want_batch, "eval_batch %d, want %d", sb, want_batch);
     if (sb != SHL_OK)
         FUZZ_CHECK(fz_untouched(brgb, rb * np) && fz_untouched(bgrad, gbb * np), "batch written on error");
+    {   /* float batch through the SIMD kernels */
+        float fpts[3 * MAXP];
+        for (int k = 0; k < 3 * np; ++k) fpts[k] = (float)bpts[k];
+        int ffinite = 1;
+        for (int k = 0; k < 3 * np; ++k) ffinite &= isfinite(fpts[k]) != 0;
+        const size_t frb = sizeof(float) * 3 * nc, fgb = sizeof(float) * 9 * nc;
+        float *frgb = fz_guarded(frb * np), *fgrad = fz_guarded(fgb * np);
+        float *one = fz_guarded(frb), *one_g = fz_guarded(fgb);
+        if (allocs) {
+            shl__alloc_fail_after = 0;
+            const int sf = shl_lights_eval_batch_f(ctx, set, np, fpts, frgb, with_grad ? fgrad : NULL);
+            shl__alloc_fail_after = -1;
+            FUZZ_CHECK(sf == (!ffinite ? SHL_ENONFINITE : count ? SHL_ENOMEM : SHL_OK), "eval_batch_f under ENOMEM: %d", sf);
+            if (sf != SHL_OK) FUZZ_CHECK(fz_untouched(frgb, frb * np) && fz_untouched(fgrad, fgb * np), "written on ENOMEM");
+        }
+        const int sf = shl_lights_eval_batch_f(ctx, set, np, fpts, frgb, with_grad ? fgrad : NULL);
+        FUZZ_CHECK(sf == (ffinite ? SHL_OK : SHL_ENONFINITE), "eval_batch_f %d", sf);
+        if (sf != SHL_OK) FUZZ_CHECK(fz_untouched(frgb, frb * np) && fz_untouched(fgrad, fgb * np), "batch_f written on error");
+        for (int p = 0; p < np && sf == SHL_OK; ++p) {
+            const float *o = frgb + (size_t)3 * nc * p, *og = fgrad + (size_t)9 * nc * p;
+            FUZZ_CHECK(shl_lights_eval_batch_f(ctx, set, 1, fpts + 3 * p, one, with_grad ? one_g : NULL) == SHL_OK,
+                       "eval_batch_f, one point");
+            FUZZ_CHECK(memcmp(one, o, frb) == 0, "eval_batch_f depends on the batch at point %d", p);
+            if (with_grad) FUZZ_CHECK(memcmp(one_g, og, fgb) == 0, "eval_batch_f gradient depends on the batch, point %d", p);
+            for (int k = 0; k < 3 * nc; ++k) {
+                if (count == 0) FUZZ_CHECK(o[k] == 0.0f, "empty set, float: rgb[%d] = %g", k, o[k]);
+                if (magnitude < 1e30L) FUZZ_CHECK(isfinite(o[k]), "non-finite float rgb[%d] at point %d", k, p);
+            }
+        }
+        free(frgb);
+        free(fgrad);
+        free(one);
+        free(one_g);
+    }
     for (int p = 0; p < np; ++p) {
         double *o = rgb + (size_t)3 * nc * p, *og = grad + (size_t)9 * nc * p;
         const int st = shl_lights_eval(ctx, set, pts + 3 * p, o, with_grad ? og : NULL);
@@ -196,6 +238,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         /* sum of the single-light entry points */
         const double *x = pts + 3 * p;
         long double *sum = calloc((size_t)12 * nc, sizeof(long double)), *scale = calloc(4 * 3, sizeof(long double));
+        long double floor_c[3] = {1e-300L, 1e-300L, 1e-300L}; /* + sum_i |rgb_ic| 64 DBL_TRUE_MIN: underflowed unit results */
         double *lc = malloc(sizeof(double) * nc), *lg = malloc(sizeof(double) * 3 * nc);
         int comparable = 1, bounded = all_structured;
         long double *bound = calloc((size_t)3 * nc, sizeof(long double)), gfinite = 0.0L;
@@ -221,6 +264,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 for (int k = 0; k < nc; ++k) sum[c * nc + k] += (long double)li->rgb[c] * lc[k];
                 for (int k = 0; k < 3 * nc; ++k) sum[3 * nc + c * 3 * nc + k] += (long double)li->rgb[c] * lg[k];
                 scale[c] += fabsl(li->rgb[c]) * sc;
+                floor_c[c] += fabsl(li->rgb[c]) * 64.0L * 0x1p-1074L;
                 scale[3 + c] += li->rgb[c] == 0.0 ? 0.0L : fabsl(li->rgb[c]) * gsc;
             }
             gfinite += gsc * fmaxl(fabsl(li->rgb[0]), fmaxl(fabsl(li->rgb[1]), fabsl(li->rgb[2])));
@@ -247,13 +291,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (with_grad && gfinite < 1e290L) FUZZ_CHECK(all_finite_d(og, 9 * nc), "non-finite gradient at point %d", p);
         for (int c = 0; c < 3 && comparable; ++c)
             for (int k = 0; k < nc; ++k)
-                FUZZ_CHECK(fabsl(o[c * nc + k] - sum[c * nc + k]) <= 1e-9L * scale[c] + 1e-300L,
+                FUZZ_CHECK(fabsl(o[c * nc + k] - sum[c * nc + k]) <= 1e-9L * scale[c] + floor_c[c],
                            "set vs sum of lights: rgb[%d][%d] %.17g vs %.17Lg (scale %.3Lg)", c, k, o[c * nc + k],
                            sum[c * nc + k], scale[c]);
         for (int c = 0; c < 3 && comparable && with_grad; ++c)
             for (int k = 0; k < 3 * nc; ++k)
                 if (isfinite(og[c * 3 * nc + k]) && isfinite(scale[3 + c]))
-                    FUZZ_CHECK(fabsl(og[c * 3 * nc + k] - sum[3 * nc + c * 3 * nc + k]) <= 1e-9L * scale[3 + c] + 1e-300L,
+                    FUZZ_CHECK(fabsl(og[c * 3 * nc + k] - sum[3 * nc + c * 3 * nc + k]) <= 1e-9L * scale[3 + c] + floor_c[c],
                                "set vs sum of lights: grad[%d][%d] %.17g vs %.17Lg (scale %.3Lg)", c, k, og[c * 3 * nc + k],
                                sum[3 * nc + c * 3 * nc + k], scale[3 + c]);
         for (int k = 0; bounded && k < 3 * nc; ++k)

@@ -1,0 +1,337 @@
+/* Light sets in float through the batch kernels (shl_lights_eval_batch_f), for
+ * every ISA this machine runs, against the scalar double reference
+ * shl_lights_eval on the float-rounded points.
+ *
+ * Tolerance: the set's result is the sum over lights of rgb_c times each
+ * light's unit-radiance result, so its error is at most the sum of the lights'
+ * own errors times |rgb_c|, plus the float summation (n lights x FLT_EPSILON x
+ * sum |terms|, |L_lm| <= sqrt(2l+1) |L00|: < 1e-5 |L00| for the 9 lights and
+ * lmax <= 14 here).  Each light's error is bounded by the tolerance its own
+ * batch test states: polygons (test_simd.c) 2e-5 + 4e-5/theta of |L00| and
+ * 1e-4 + 5e-5/theta of max|grad| (theta = sqrt(solid angle)), spheres
+ * (test_simd_sphere_interp.c) 2e-5 |L00| and 1e-5 max|grad| up to lmax 14,
+ * 1.5e-4 and 3e-5 above.  Per light, |L00| and max|grad| come from
+ * shl_polygon_grad / shl_sphere_grad in double.  The floor 16 FLT_MIN per light
+ * admits results below float range (the gradient of a light 1e100 away). */
+#include "geom.h"
+#include "isa_ctx.h"
+#include "testutil.h"
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+
+enum { MAXLIGHTS = 12, MAXPTS = 150, NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
+
+/* A light set and a copy of what went into it (for the per-light scales). */
+typedef struct {
+    shl_lights *set;
+    int count, n[MAXLIGHTS], two_sided[MAXLIGHTS], sphere[MAXLIGHTS];
+    double v[MAXLIGHTS][3 * SHL_MAX_VERTS], rgb[MAXLIGHTS][3], center[MAXLIGHTS][3], radius[MAXLIGHTS];
+} light_set;
+
+static void add_polygon(light_set *s, const double *v, int n, const double rgb[3], int two_sided)
+{
+    const int i = s->count++;
+    CHECK(shl_lights_add_polygon(s->set, v, n, rgb, two_sided) == SHL_OK);
+    memcpy(s->v[i], v, sizeof(double) * 3 * n);
+    memcpy(s->rgb[i], rgb, sizeof(double) * 3);
+    s->n[i] = n;
+    s->two_sided[i] = two_sided;
+    s->sphere[i] = 0;
+}
+
+static void add_sphere(light_set *s, const double center[3], double radius, const double rgb[3])
+{
+    const int i = s->count++;
+    CHECK(shl_lights_add_sphere(s->set, center, radius, rgb) == SHL_OK);
+    memcpy(s->center[i], center, sizeof(double) * 3);
+    memcpy(s->rgb[i], rgb, sizeof(double) * 3);
+    s->radius[i] = radius;
+    s->sphere[i] = 1;
+}
+
+/* Per-colour tolerances tc[c], tg[c] at x: the sum over lights reaching x of
+ * |rgb_c| times the light's tolerance (see the top of the file). */
+static void tolerances(const shl_ctx *ctx, const light_set *s, const double x[3], double tc[3], double tg[3])
+{
+    const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax);
+    static double c[NCMAX], g[3 * NCMAX];
+    for (int k = 0; k < 3; ++k) tc[k] = tg[k] = 0.0;
+    for (int i = 0; i < s->count; ++i) {
+        double ct, gt;
+        if (s->sphere[i]) {
+            CHECK(shl_sphere_grad(ctx, x, s->center[i], s->radius[i], c, g) == SHL_OK);
+            ct = lmax <= 14 ? 2e-5 : 1.5e-4;
+            gt = lmax <= 14 ? 1e-5 : 3e-5;
+        } else {
+            double omega, nrm[3] = {0, 0, 0};
+            const double *v = s->v[i];
+            for (int j = 1; j + 1 < s->n[i]; ++j) { /* Newell normal, fan from v_0 */
+                const double e[3] = {v[3 * j] - v[0], v[3 * j + 1] - v[1], v[3 * j + 2] - v[2]};
+                const double f[3] = {v[3 * j + 3] - v[0], v[3 * j + 4] - v[1], v[3 * j + 5] - v[2]};
+                nrm[0] += e[1] * f[2] - e[2] * f[1];
+                nrm[1] += e[2] * f[0] - e[0] * f[2];
+                nrm[2] += e[0] * f[1] - e[1] * f[0];
+            }
+            const double front = nrm[0] * (x[0] - v[0]) + nrm[1] * (x[1] - v[1]) + nrm[2] * (x[2] - v[2]);
+            if (!s->two_sided[i] && !(front > 0.0)) continue;
+            CHECK(shl_polygon_grad(ctx, x, v, s->n[i], c, g) == SHL_OK);
+            CHECK(shl_polygon_solid_angle(x, v, s->n[i], &omega) == SHL_OK);
+            if (omega == 0.0) continue;
+            ct = 2e-5 + 4e-5 / sqrt(omega);
+            gt = 1e-4 + 5e-5 / sqrt(omega);
+        }
+        double gmax = 0.0;
+        for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(g[k]));
+        for (int k = 0; k < 3; ++k) {
+            tc[k] += fabs(s->rgb[i][k]) * (ct * fabs(c[0]) + 16.0 * FLT_MIN);
+            tg[k] += fabs(s->rgb[i][k]) * (gt * gmax + 16.0 * FLT_MIN);
+        }
+    }
+}
+
+/* The batch against shl_lights_eval at every point; returns the worst error / tolerance. */
+static double check_set(const shl_ctx *ctx, const light_set *s, const float *pts, int npts, const char *what)
+{
+    const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax);
+    static float rgb[3 * MAXPTS * NCMAX + 1], grad[9 * MAXPTS * NCMAX + 1], rgb2[3 * MAXPTS * NCMAX + 1];
+    static double ref[3 * NCMAX], ref_grad[9 * NCMAX];
+    double worst = 0.0;
+    rgb[3 * npts * nc] = grad[9 * npts * nc] = rgb2[3 * npts * nc] = 7.0f;
+    CHECK(shl_lights_eval_batch_f(ctx, s->set, npts, pts, rgb, grad) == SHL_OK);
+    CHECK(shl_lights_eval_batch_f(ctx, s->set, npts, pts, rgb2, NULL) == SHL_OK);
+    CHECK(rgb[3 * npts * nc] == 7.0f && grad[9 * npts * nc] == 7.0f && rgb2[3 * npts * nc] == 7.0f);
+    for (int p = 0; p < npts; ++p) {
+        const double x[3] = {pts[3 * p], pts[3 * p + 1], pts[3 * p + 2]};
+        double tc[3], tg[3];
+        CHECK(shl_lights_eval(ctx, s->set, x, ref, ref_grad) == SHL_OK);
+        tolerances(ctx, s, x, tc, tg);
+        const float *rp = rgb + 3 * (size_t)nc * p, *gp = grad + 9 * (size_t)nc * p;
+        for (int c = 0; c < 3; ++c) {
+            double ec = 0.0, eg = 0.0;
+            int ok = 1;
+            for (int k = 0; k < nc; ++k) {
+                ok &= isfinite(rp[c * nc + k]) && rp[c * nc + k] == rgb2[3 * (size_t)nc * p + c * nc + k];
+                ec = fmax(ec, fabs(rp[c * nc + k] - ref[c * nc + k]));
+            }
+            for (int k = 0; k < 3 * nc; ++k) {
+                ok &= isfinite(gp[3 * c * nc + k]);
+                eg = fmax(eg, fabs(gp[3 * c * nc + k] - ref_grad[3 * c * nc + k]));
+            }
+            CHECK(ok);
+            /* nothing reaches x in this channel (tolerance 0): exact zeros */
+            const double rc = tc[c] > 0.0 ? ec / tc[c] : (ec == 0.0 ? 0.0 : HUGE_VAL);
+            const double rg = tg[c] > 0.0 ? eg / tg[c] : (eg == 0.0 ? 0.0 : HUGE_VAL);
+            if (!(rc <= 1.0 && rg <= 1.0))
+                harness_fail(__FILE__, __LINE__,
+                             "%s [%s, lmax %d] point %d (%a, %a, %a) colour %d: coeffs %.3g (tol %.3g), grad %.3g "
+                             "(tol %.3g)",
+                             what, shl_ctx_isa(ctx), lmax, p, x[0], x[1], x[2], c, ec, tc[c], eg, tg[c]);
+            worst = fmax(worst, fmax(rc, rg));
+        }
+    }
+    return worst;
+}
+
+/* Six random polygons (triangles, quads, concave hexagons; one-sided and
+ * two-sided, radiance of either sign) and two spheres around the origin, and
+ * npts points in [-2, 2]^3 outside the spheres. */
+static void random_set(rng_t *r, light_set *s, float *pts, int npts)
+{
+    memset(s, 0, sizeof *s);
+    CHECK(shl_lights_create(&s->set) == SHL_OK);
+    for (int i = 0; i < 6; ++i) {
+        double center[3], nrm[3], v[18], rgb[3];
+        for (int k = 0; k < 3; ++k) center[k] = rng_range(r, -2.5, 2.5), rgb[k] = rng_range(r, -0.5, 2.0);
+        rng_unit_vector(r, nrm);
+        const int n = i % 3 == 0 ? 3 : i % 3 == 1 ? 4 : 6;
+        random_polygon(r, n, n == 6, center, nrm, rng_range(r, 0.3, 1.5), v);
+        add_polygon(s, v, n, rgb, i % 2);
+    }
+    for (int i = 0; i < 2; ++i) {
+        double center[3], rgb[3];
+        for (int k = 0; k < 3; ++k) center[k] = rng_range(r, -3.0, 3.0), rgb[k] = rng_range(r, 0.0, 3.0);
+        add_sphere(s, center, rng_range(r, 0.1, 0.6), rgb);
+    }
+    for (int p = 0; p < npts; ++p) {
+        double x[3];
+        int outside;
+        do {
+            for (int k = 0; k < 3; ++k) x[k] = (float)rng_range(r, -2.0, 2.0);
+            outside = 1;
+            for (int i = 0; i < s->count; ++i)
+                if (s->sphere[i]) {
+                    const double d[3] = {x[0] - s->center[i][0], x[1] - s->center[i][1], x[2] - s->center[i][2]};
+                    outside &= sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 1.1 * s->radius[i];
+                }
+        } while (!outside);
+        for (int k = 0; k < 3; ++k) pts[3 * p + k] = (float)x[k];
+    }
+}
+
+SHL_TEST(simd_lights_random_vs_double_reference)
+{
+    static const int lmaxes[] = {0, 1, 2, 4, 8, 14, 30};
+    rng_t r = {20261201};
+    static float pts[3 * MAXPTS];
+    for (int i = 0; i < NISA; ++i)
+        for (size_t li = 0; li < sizeof lmaxes / sizeof lmaxes[0]; ++li) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmaxes[li]);
+            if (!ctx) continue;
+            double worst = 0.0;
+            const int nsets = lmaxes[li] == 30 ? 1 : 4;
+            for (int t = 0; t < nsets; ++t) {
+                light_set s;
+                random_set(&r, &s, pts, 37);
+                worst = fmax(worst, check_set(ctx, &s, pts, 37, "random set"));
+                shl_lights_destroy(s.set);
+            }
+            if (lmaxes[li] == 8 || lmaxes[li] == 30) harness_note("%s lmax %d: worst error/tol %.2f", isas[i], lmaxes[li], worst);
+            shl_ctx_destroy(ctx);
+        }
+}
+
+/* A single light of radiance (1, 1, 1): its channels are exactly the single-light
+ * batch (0 + 1 u = u); chunks, tails and gathering change nothing: one call of
+ * 150 points equals 150 calls of one point, bit for bit. */
+SHL_TEST(simd_lights_single_light_and_chunks)
+{
+    static float pts[3 * MAXPTS], all[3 * MAXPTS * NCMAX], one[3 * NCMAX], single[MAXPTS * NCMAX];
+    static float all_g[9 * MAXPTS * NCMAX], one_g[9 * NCMAX], single_g[3 * MAXPTS * NCMAX];
+    const float tri_f[9] = {-1.0f, -0.5f, 1.0f, 1.0f, -0.25f, 1.25f, 0.0f, 1.0f, 0.75f};
+    const double tri[9] = {-1.0, -0.5, 1.0, 1.0, -0.25, 1.25, 0.0, 1.0, 0.75}, white[3] = {1.0, 1.0, 1.0};
+    rng_t r = {77};
+    for (int p = 0; p < MAXPTS; ++p)
+        for (int k = 0; k < 3; ++k) pts[3 * p + k] = (float)rng_range(&r, -2.0, 2.0);
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], 6);
+        if (!ctx) continue;
+        const int nc = SHL_NCOEFFS(6);
+        shl_lights *set;
+        CHECK(shl_lights_create(&set) == SHL_OK);
+        CHECK(shl_lights_add_polygon(set, tri, 3, white, 1) == SHL_OK);
+        CHECK(shl_polygon_batch_f(ctx, tri_f, 3, MAXPTS, pts, single, single_g) == SHL_OK);
+        CHECK(shl_lights_eval_batch_f(ctx, set, MAXPTS, pts, all, all_g) == SHL_OK);
+        int same = 1;
+        for (int p = 0; p < MAXPTS; ++p) {
+            CHECK(shl_lights_eval_batch_f(ctx, set, 1, pts + 3 * p, one, one_g) == SHL_OK);
+            same &= memcmp(one, all + 3 * nc * p, sizeof(float) * 3 * nc) == 0;
+            same &= memcmp(one_g, all_g + 9 * nc * p, sizeof(float) * 9 * nc) == 0;
+            for (int c = 0; c < 3; ++c) {
+                same &= memcmp(one + c * nc, single + nc * p, sizeof(float) * nc) == 0;
+                same &= memcmp(one_g + 3 * c * nc, single_g + 3 * nc * p, sizeof(float) * 3 * nc) == 0;
+            }
+        }
+        CHECK(same);
+        shl_lights_destroy(set);
+        shl_ctx_destroy(ctx);
+    }
+}
+
+/* Edges of the domain: one-sided lights seen from behind and from their plane
+ * (exact zeros), points inside and on a sphere (rgb sqrt(4 pi), zero gradient),
+ * and lights beyond float's normal range, which take the scalar float path: a
+ * square of side 2e200 (the point sees nearly a hemisphere), a sphere of radius
+ * 1e100 at distance 2e100 (a 30-degree cap) and one of radius 1e-130
+ * (coefficients below float range: zeros). */
+SHL_TEST(simd_lights_hard_cases)
+{
+    const double sq[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    const double big[12] = {-1e200, -1e200, 0, 1e200, -1e200, 0, 1e200, 1e200, 0, -1e200, 1e200, 0};
+    const double rgb[3] = {1.0, 0.5, -2.0};
+    const float pts[] = {0.25f, 0.5f, -1.0f, 0.25f, 0.5f, 0.0f, 3.0f, 0.0f, 0.0f, /* behind, in the plane, beside */
+                         0.3f, 0.2f, 5.0f, 0.0f, 0.0f, 5.5f};                      /* inside, on the small sphere */
+    enum { NP = 5 };
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], 8);
+        if (!ctx) continue;
+        const int nc = SHL_NCOEFFS(8);
+        static float out[3 * NP * NCMAX], g[9 * NP * NCMAX];
+        light_set s;
+        memset(&s, 0, sizeof s);
+        CHECK(shl_lights_create(&s.set) == SHL_OK);
+        add_polygon(&s, sq, 4, rgb, 0); /* faces +z */
+        const double c0[3] = {0.0, 0.0, 5.0};
+        add_sphere(&s, c0, 0.5, rgb);
+        CHECK(shl_lights_eval_batch_f(ctx, s.set, NP, pts, out, g) == SHL_OK);
+        /* points 0-2 see only the sphere (0: behind the square, 1: in its plane,
+         * 2: in its plane outside it): the set equals the sphere alone */
+        float sph[NP * NCMAX], sph_g[3 * NP * NCMAX];
+        const float c0f[3] = {0.0f, 0.0f, 5.0f};
+        CHECK(shl_sphere_batch_f(ctx, c0f, 0.5f, NP, pts, sph, sph_g) == SHL_OK);
+        int same = 1;
+        for (int p = 0; p < 3; ++p)
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < nc; ++k) same &= out[3 * nc * p + c * nc + k] == (float)rgb[c] * sph[nc * p + k];
+        CHECK(same);
+        for (int p = 3; p < NP; ++p) /* inside or on the sphere, in front of the square */
+            for (int c = 0; c < 3; ++c) {
+                static double sqc[NCMAX];
+                const double x[3] = {pts[3 * p], pts[3 * p + 1], pts[3 * p + 2]};
+                CHECK(shl_polygon(ctx, x, sq, 4, sqc) == SHL_OK);
+                CHECK_NEAR(out[3 * nc * p + c * nc], rgb[c] * (sqrt(4.0 * M_PI) + sqc[0]), 1e-5 * fabs(rgb[c]) * 4.0);
+            }
+        check_set(ctx, &s, pts, NP, "one-sided square and sphere");
+        shl_lights_destroy(s.set);
+
+        memset(&s, 0, sizeof s);
+        CHECK(shl_lights_create(&s.set) == SHL_OK);
+        add_polygon(&s, big, 4, rgb, 1);
+        const double cbig[3] = {0.0, 0.0, 2e100}, ctiny[3] = {0.0, 1e-30, 1.0};
+        add_sphere(&s, cbig, 1e100, rgb);
+        add_sphere(&s, ctiny, 1e-130, rgb);
+        const float far_pts[] = {0.0f, 0.0f, 1.0f, 0.5f, -0.25f, -3.0f, 1e30f, 0.0f, 1.0f};
+        check_set(ctx, &s, far_pts, 3, "lights beyond float range");
+        shl_lights_destroy(s.set);
+        shl_ctx_destroy(ctx);
+    }
+}
+
+SHL_TEST(simd_lights_bad_input_and_alloc_failure)
+{
+    shl_ctx *ctx;
+    shl_lights *set, *empty;
+    CHECK(shl_ctx_create(4, &ctx) == SHL_OK);
+    CHECK(shl_lights_create(&set) == SHL_OK);
+    CHECK(shl_lights_create(&empty) == SHL_OK);
+    const double tri[9] = {0, 0, 1, 1, 0, 1, 0, 1, 1}, rgb[3] = {1, 2, 3}, c[3] = {0, 0, -2};
+    CHECK(shl_lights_add_polygon(set, tri, 3, rgb, 0) == SHL_OK);
+    CHECK(shl_lights_add_sphere(set, c, 0.5, rgb) == SHL_OK);
+    const int nc = SHL_NCOEFFS(4);
+    float pts[6] = {0.1f, 0.2f, 0.0f, 0.0f, 0.0f, 0.0f}, out[6 * SHL_NCOEFFS(4)], g[18 * SHL_NCOEFFS(4)];
+    CHECK(shl_lights_eval_batch_f(NULL, set, 1, pts, out, NULL) == SHL_ENULL);
+    CHECK(shl_lights_eval_batch_f(ctx, NULL, 1, pts, out, NULL) == SHL_ENULL);
+    CHECK(shl_lights_eval_batch_f(ctx, set, 1, NULL, out, NULL) == SHL_ENULL);
+    CHECK(shl_lights_eval_batch_f(ctx, set, 1, pts, NULL, NULL) == SHL_ENULL);
+    CHECK(shl_lights_eval_batch_f(ctx, set, -1, pts, out, NULL) == SHL_EDOMAIN);
+    CHECK(shl_lights_eval_batch_f(ctx, set, 0, NULL, NULL, NULL) == SHL_OK);
+    for (int k = 0; k < 3 * nc; ++k) out[k] = 7.0f;
+    pts[4] = NAN; /* the second point: nothing is written */
+    CHECK(shl_lights_eval_batch_f(ctx, set, 2, pts, out, g) == SHL_ENONFINITE);
+    pts[4] = INFINITY;
+    CHECK(shl_lights_eval_batch_f(ctx, set, 2, pts, out, g) == SHL_ENONFINITE);
+    int untouched = 1;
+    for (int k = 0; k < 3 * nc; ++k) untouched &= out[k] == 7.0f;
+    CHECK(untouched);
+    pts[4] = 0.0f;
+    CHECK(shl_lights_eval_batch_f(ctx, empty, 2, pts, out, g) == SHL_OK);
+    int zeros = 1;
+    for (int k = 0; k < 6 * nc; ++k) zeros &= out[k] == 0.0f;
+    for (int k = 0; k < 18 * nc; ++k) zeros &= g[k] == 0.0f;
+    CHECK(zeros);
+    for (long fail = 0; fail < 2; ++fail) { /* one allocation; on failure nothing is written */
+        for (int k = 0; k < 6 * nc; ++k) out[k] = 7.0f;
+        shl__alloc_fail_after = fail;
+        const int st = shl_lights_eval_batch_f(ctx, set, 2, pts, out, g);
+        shl__alloc_fail_after = -1;
+        CHECK(st == (fail == 0 ? SHL_ENOMEM : SHL_OK));
+        untouched = 1;
+        for (int k = 0; k < 6 * nc; ++k) untouched &= out[k] == 7.0f;
+        CHECK(untouched == (fail == 0));
+    }
+    shl_lights_destroy(set);
+    shl_lights_destroy(empty);
+    shl_ctx_destroy(ctx);
+}
