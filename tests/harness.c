@@ -1,6 +1,8 @@
-/* Test runner: runs every registered test, or those whose name contains one of
- * the comma-separated substrings of argv[1]; prints one line per test with its
- * time, and ends with "N passed, M failed". */
+/* Test runner: runs every registered test, or those selected by argv[1], a
+ * comma-separated list of substrings: a test runs if its name contains one of
+ * the plain parts (every test when there are none) and none of the parts
+ * written -substring.  Prints one line per test with its time, and ends with
+ * "N passed, M failed". */
 #include "harness.h"
 #include <stdarg.h>
 #include <stdlib.h>
@@ -50,6 +52,7 @@ int harness_failed_current(void) { return current_failures; }
 static int matches(const char *name, const char *filter)
 {
     if (!filter) return 1;
+    int included = 0, any_plain = 0;
     const char *p = filter;
     while (*p) {
         const size_t len = strcspn(p, ",");
@@ -57,11 +60,16 @@ static int matches(const char *name, const char *filter)
         if (len > 0 && len < sizeof part) {
             memcpy(part, p, len);
             part[len] = '\0';
-            if (strstr(name, part)) return 1;
+            if (part[0] == '-') {
+                if (part[1] && strstr(name, part + 1)) return 0;
+            } else {
+                any_plain = 1;
+                included |= strstr(name, part) != NULL;
+            }
         }
         p += len + (p[len] == ',');
     }
-    return 0;
+    return included || !any_plain;
 }
 
 static double now_ms(void)
