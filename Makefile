@@ -20,19 +20,21 @@ ifeq ($(SANITIZE),thread)
 endif
 LDLIBS   += -lm -lpthread
 
-# SIMD batch kernels (simd/): the kernel texts simd/poly_batch.h and simd/sphere_batch.h
-# compiled once per ISA, simd/interp_batch.h once per vector ISA (the scalar table
+# SIMD batch kernels (simd/): the kernel texts simd/poly_batch.h, simd/sphere_batch.h and
+# simd/lights_batch.h compiled once per ISA, simd/interp_batch.h once per vector ISA (the scalar table
 # interpolates with the reference, src/interp_kernel.h).
 # Only the AVX2 object gets -mavx2 -mfma; src/dispatch.c picks a kernel at run time.
 SHL_ARCH := $(shell $(CC) -dumpmachine)
-SIMD_SRC := simd/scalar/poly_batch_scalar.c simd/scalar/sphere_batch_scalar.c
+SIMD_SRC := simd/scalar/poly_batch_scalar.c simd/scalar/sphere_batch_scalar.c simd/scalar/lights_batch_scalar.c
 SIMD_DEFS :=
 ifneq ($(filter x86_64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/avx2/poly_batch_avx2.c simd/avx2/sphere_batch_avx2.c simd/avx2/interp_batch_avx2.c
+  SIMD_SRC  += simd/avx2/poly_batch_avx2.c simd/avx2/sphere_batch_avx2.c simd/avx2/interp_batch_avx2.c \
+               simd/avx2/lights_batch_avx2.c
   SIMD_DEFS += -DSHL_HAVE_AVX2
 endif
 ifneq ($(filter aarch64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/neon/poly_batch_neon.c simd/neon/sphere_batch_neon.c simd/neon/interp_batch_neon.c
+  SIMD_SRC  += simd/neon/poly_batch_neon.c simd/neon/sphere_batch_neon.c simd/neon/interp_batch_neon.c \
+               simd/neon/lights_batch_neon.c
   SIMD_DEFS += -DSHL_HAVE_NEON
 endif
 

@@ -4,7 +4,9 @@
  *  - fraction of peak: this core's FMA throughput measured in the same run
  *    (independent FMA chains in registers) against the kernel's counted flops,
  *  - spherical light: shl_sphere_batch_f vs shl_sphere / shl_sphere_grad (and the same kernel
- *    compiled scalar, and shl_sphere_f), lmax 2..14.
+ *    compiled scalar, and shl_sphere_f), lmax 2..14,
+ *  - light set (8 triangles, 2 spheres): shl_lights_eval_batch_f vs shl_lights_eval (and the
+ *    same kernels compiled scalar, and shl_lights_eval_batch_f one point per call), lmax 2..14.
  * All ratios come from one run.  CSV: $BUILD/bench/bench_simd.csv (argv[1] overrides). */
 #include "shlight.h"
 #include "util.h"
@@ -25,6 +27,7 @@ typedef struct {
     const shl_ctx *ctx;
     float vf[3 * NV], pf[3 * NPTS], *out, *grad;
     double vd[3 * NV], pd[3 * NPTS], *outd, *gradd;
+    const shl_lights *set; /* light-set variants */
     long inner; /* evaluations per timed call */
 } job;
 
@@ -90,6 +93,54 @@ static void run_sphere_float(void *p)
         else shl_sphere_f(j->ctx, x, sphere_cf, 0.5f, j->out);
     }
     bench_sink += j->out[1];
+}
+
+/* Light set: shl_lights_eval_batch_f on NPTS points per call, the double
+ * single-point shl_lights_eval, and the float batch with one point per call. */
+static void run_lights_batch(void *p)
+{
+    job *j = p;
+    for (long done = 0; done < j->inner; done += NPTS)
+        shl_lights_eval_batch_f(j->ctx, j->set, NPTS, j->pf, j->out, j->grad);
+    bench_sink += j->out[1];
+}
+
+static void run_lights_double(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) shl_lights_eval(j->ctx, j->set, j->pd + 3 * (i % NPTS), j->outd, j->gradd);
+    bench_sink += j->outd[1];
+}
+
+static void run_lights_one_point(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) shl_lights_eval_batch_f(j->ctx, j->set, 1, j->pf + 3 * (i % NPTS), j->out, j->grad);
+    bench_sink += j->out[1];
+}
+
+/* 8 triangles (the bench triangle rotated about z by k pi/4 and lifted by k/8;
+ * even k one-sided, facing the points, odd k two-sided) and 2 spheres. */
+enum { SET_POLYS = 8, SET_SPHERES = 2 };
+static shl_lights *make_light_set(const double *tri)
+{
+    shl_lights *set;
+    shl_lights_create(&set);
+    for (int k = 0; k < SET_POLYS; ++k) {
+        const double a = M_PI * k / 4, c = cos(a), s = sin(a), rgb[3] = {1.0, 0.5 + 0.1 * k, 0.25};
+        double v[3 * NV];
+        for (int i = 0; i < NV; ++i) {
+            const int src = k % 2 ? i : NV - 1 - i; /* reversed: the front faces -z, toward the points */
+            v[3 * i] = c * tri[3 * src] - s * tri[3 * src + 1];
+            v[3 * i + 1] = s * tri[3 * src] + c * tri[3 * src + 1];
+            v[3 * i + 2] = tri[3 * src + 2] + k / 8.0;
+        }
+        shl_lights_add_polygon(set, v, NV, rgb, k % 2);
+    }
+    const double c0[3] = {2.5, 0.0, 1.0}, c1[3] = {-2.0, 1.5, -1.0}, rgb[3] = {2.0, 2.0, 1.0};
+    shl_lights_add_sphere(set, c0, 0.5, rgb);
+    shl_lights_add_sphere(set, c1, 0.3, rgb);
+    return set;
 }
 
 /* Calibrate j->inner (a multiple of granule) for calls of about 10 ms. */
@@ -245,8 +296,8 @@ int main(int argc, char **argv)
     const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_simd.csv";
     FILE *csv = fopen(csv_path, "w");
     static job j;
-    static float out[NPTS * SHL_NCOEFFS(14)], grad[3 * NPTS * SHL_NCOEFFS(14)];
-    static double outd[SHL_NCOEFFS(14)], gradd[3 * SHL_NCOEFFS(14)];
+    static float out[3 * NPTS * SHL_NCOEFFS(14)], grad[9 * NPTS * SHL_NCOEFFS(14)]; /* light sets: 3 colours */
+    static double outd[3 * SHL_NCOEFFS(14)], gradd[9 * SHL_NCOEFFS(14)];
     shl_ctx *probe;
     shl_ctx_create(0, &probe);
     const char *isa = shl_ctx_isa(probe);
@@ -313,6 +364,29 @@ int main(int argc, char **argv)
         }
     }
     printf("\nSphere: medians over 15 rounds, speed-ups within each round, as above.\n");
+
+    /* light set: shl_lights_eval_batch_f vs the double single-point shl_lights_eval */
+    shl_lights *set = make_light_set(j.vd);
+    j.set = set;
+    const variants lights = {run_lights_batch, run_lights_double, run_lights_one_point};
+    if (csv) fprintf(csv, "lights_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_batch_one_point,,,,\n");
+    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+        printf("\n## Light set (%d triangles, %d spheres, RGB) %s, one core (%d points per batch call; time per point)\n\n",
+               SET_POLYS, SET_SPHERES, with_grad ? "coefficients and gradients" : "coefficients", NPTS);
+        printf("| lmax | shl_lights_eval (double) ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | batch, 1 point per "
+               "call ns | batch ns per light |\n", isa);
+        printf("|---|---|---|---|---|---|---|\n");
+        for (int lmax = 2; lmax <= 14; lmax += 2) {
+            const timing t = time_variants(&lights, &j, lmax, with_grad, grad, gradd, 0.0, NULL);
+            printf("| %d | %.0f | %.0f | **%.1fx** | %.0f | %.0f | %.1f |\n", lmax, t.scalar_double * 1e9, t.batch * 1e9,
+                   t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9, t.batch * 1e9 / (SET_POLYS + SET_SPHERES));
+            if (csv)
+                fprintf(csv, "%d,%d,%s,%.2f,%.1f,%.2f,%.1f,%.1f,,,,\n", with_grad, lmax, isa, t.batch * 1e9,
+                        t.scalar_double * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9);
+        }
+    }
+    printf("\nLight set: medians over 15 rounds, speed-ups within each round, as above.\n");
+    shl_lights_destroy(set);
     if (csv) fclose(csv);
     shl_ctx_destroy(probe);
     printf("(checksum %g)\n", (double)bench_sink);

@@ -1,6 +1,7 @@
 /* Batched kernels: the polygon prepared once per call (src/batch.c), the
  * per-ISA kernel table (src/dispatch.c), shared with the kernels compiled
- * once per ISA from simd/poly_batch.h, simd/sphere_batch.h and simd/interp_batch.h. */
+ * once per ISA from simd/poly_batch.h, simd/sphere_batch.h, simd/interp_batch.h
+ * and simd/lights_batch.h. */
 #ifndef SHL_SIMD_BATCH_H
 #define SHL_SIMD_BATCH_H
 
@@ -80,6 +81,7 @@ struct shl__isa {
     size_t (*sphere_work_bytes)(int lmax, int with_grad);
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
+    void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
 };
 
 /* Kernels of simd/poly_batch.h, one instance per ISA (simd/<isa>/). */
@@ -99,6 +101,11 @@ SHL__DECLARE_POLY_BATCH(neon)
 SHL__DECLARE_SPHERE_BATCH(scalar)
 SHL__DECLARE_SPHERE_BATCH(avx2)
 SHL__DECLARE_SPHERE_BATCH(neon)
+
+/* Light-set accumulation of simd/lights_batch.h, one instance per ISA. */
+void shl__accumulate_scalar(size_t n, float s, const float *x, float *y);
+void shl__accumulate_avx2(size_t n, float s, const float *x, float *y);
+void shl__accumulate_neon(size_t n, float s, const float *x, float *y);
 
 /* Interpolation: the reference (src/interp.c) and simd/interp_batch.h per vector ISA. */
 void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, double *out);

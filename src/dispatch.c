@@ -42,6 +42,7 @@ const shl__isa shl__isa_scalar = {
     .sphere_work_bytes = shl__sphere_work_bytes_scalar,
     .sphere_batch = shl__sphere_batch_scalar,
     .interp_f = shl__interp_ref_f,
+    .accumulate = shl__accumulate_scalar,
 };
 #ifdef SHL_HAVE_AVX2
 const shl__isa shl__isa_avx2 = {
@@ -52,6 +53,7 @@ const shl__isa shl__isa_avx2 = {
     .sphere_work_bytes = shl__sphere_work_bytes_avx2,
     .sphere_batch = shl__sphere_batch_avx2,
     .interp_f = shl__interp_f_avx2,
+    .accumulate = shl__accumulate_avx2,
 };
 #endif
 #ifdef SHL_HAVE_NEON
@@ -63,6 +65,7 @@ const shl__isa shl__isa_neon = {
     .sphere_work_bytes = shl__sphere_work_bytes_neon,
     .sphere_batch = shl__sphere_batch_neon,
     .interp_f = shl__interp_f_neon,
+    .accumulate = shl__accumulate_neon,
 };
 #endif
 

@@ -87,13 +87,9 @@ int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int np
             for (int j = 0; j < m; ++j) /* Wu 2020 Alg. 1 line 7: the lights add linearly */
                 for (int c = 0; c < 3; ++c) {
                     const float s = (float)li->rgb[c];
-                    float *out = rgb + (3 * (size_t)index[j] + c) * nc;
-                    const float *u = unit + nc * j;
-                    for (size_t k = 0; k < nc; ++k) out[k] += s * u[k];
-                    if (!grad) continue;
-                    float *og = grad + (9 * (size_t)index[j] + 3 * c) * nc; /* (c*3 + a)*nc + k */
-                    const float *ug = ugrad + 3 * nc * j;
-                    for (size_t k = 0; k < 3 * nc; ++k) og[k] += s * ug[k];
+                    ctx->isa->accumulate(nc, s, unit + nc * j, rgb + (3 * (size_t)index[j] + c) * nc);
+                    if (grad) /* layout (c*3 + a)*nc + k */
+                        ctx->isa->accumulate(3 * nc, s, ugrad + 3 * nc * j, grad + (9 * (size_t)index[j] + 3 * c) * nc);
                 }
         }
     }
