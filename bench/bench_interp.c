@@ -1,7 +1,8 @@
 /* Grid interpolation benchmark (shl_grid_interp, float storage), one core unless stated:
  *  - vertices per second for trilinear, Taylor (Annen 2004) and Hermite (Wu 2020 Alg. 4)
  *    at lmax 4 and 8, from an L2-resident grid (4^3 nodes) and from a grid far larger
- *    than the last-level cache (>= 120 MB, random vertex order: every corner misses);
+ *    than the last-level cache (4 x the L3 size sysconf reports, at least 120 MB; random
+ *    vertex order: every corner misses);
  *  - the context's SIMD kernel (simd/interp_batch.h) against the scalar reference
  *    (SHLIGHT_ISA=scalar: src/interp_kernel.h), as a ratio within each round;
  *  - grid bytes read per vertex and the achieved share of this core's memory bandwidth,
@@ -17,8 +18,26 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 enum { CHUNK = 128, NPTS = 1 << 16, ROUNDS = 11 };
+
+/* Bytes that cannot stay in any cache: 4 x the last-level cache, at least 120 MB
+ * (32 MB assumed where sysconf does not know the L3). */
+static size_t out_of_cache_bytes(void)
+{
+    const long l3 = sysconf(_SC_LEVEL3_CACHE_SIZE);
+    const size_t llc = l3 > 0 ? (size_t)l3 : (size_t)32 << 20;
+    return 4 * llc > ((size_t)120 << 20) ? 4 * llc : (size_t)120 << 20;
+}
+
+/* Nodes per axis of the out-of-cache grid at lmax (float storage). */
+static int out_of_cache_res(int lmax)
+{
+    int bytes;
+    shl_grid_bytes_per_node(lmax, SHL_GRID_FLOAT, &bytes);
+    return (int)ceil(cbrt((double)out_of_cache_bytes() / bytes));
+}
 
 static void *xmalloc(size_t n)
 {
@@ -31,13 +50,13 @@ static void *xmalloc(size_t n)
 }
 
 /* ---- memory bandwidth of this core: read (sum) and triad a = b + s c ---- */
-enum { BW_DOUBLES = 1 << 25 }; /* 256 MB per array: far beyond the caches */
+static size_t bw_doubles; /* out_of_cache_bytes() / 8, at least 256 MB: far beyond the caches */
 
 static double read_bw(const double *a)
 {
     double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0, s6 = 0, s7 = 0;
     const double t0 = bench_now();
-    for (size_t i = 0; i < BW_DOUBLES; i += 8) {
+    for (size_t i = 0; i < bw_doubles; i += 8) {
         s0 += a[i];
         s1 += a[i + 1];
         s2 += a[i + 2];
@@ -49,7 +68,7 @@ static double read_bw(const double *a)
     }
     const double t = bench_now() - t0;
     bench_sink += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7;
-    return BW_DOUBLES * sizeof(double) / t;
+    return bw_doubles * sizeof(double) / t;
 }
 
 static double triad_bw(double *a, const double *b, const double *c, size_t n)
@@ -162,18 +181,24 @@ int main(int argc, char **argv)
     srand(7);
     for (int k = 0; k < 3 * NPTS; ++k) pts[k] = (double)rand() / RAND_MAX;
 
-    double *bw_a = xmalloc(sizeof(double) * BW_DOUBLES), *bw_b = xmalloc(sizeof(double) * BW_DOUBLES / 4),
-           *bw_c = xmalloc(sizeof(double) * BW_DOUBLES / 4);
-    for (size_t i = 0; i < BW_DOUBLES; ++i) bw_a[i] = 1.0 / (1.0 + (double)(i & 1023));
-    for (size_t i = 0; i < BW_DOUBLES / 4; ++i) bw_b[i] = bw_c[i] = bw_a[i], bw_a[i] = 0.0;
+    bw_doubles = out_of_cache_bytes() / sizeof(double);
+    if (bw_doubles < ((size_t)1 << 25)) bw_doubles = (size_t)1 << 25;
+    bw_doubles &= ~(size_t)7; /* read_bw sums 8 at a time */
+    double *bw_a = xmalloc(sizeof(double) * bw_doubles), *bw_b = xmalloc(sizeof(double) * bw_doubles / 4),
+           *bw_c = xmalloc(sizeof(double) * bw_doubles / 4);
+    for (size_t i = 0; i < bw_doubles; ++i) bw_a[i] = 1.0 / (1.0 + (double)(i & 1023));
+    for (size_t i = 0; i < bw_doubles / 4; ++i) bw_b[i] = bw_c[i] = bw_a[i], bw_a[i] = 0.0;
     double rbw[5], tbw[5];
     for (int r = 0; r < 5; ++r) {
         rbw[r] = read_bw(bw_a);
-        tbw[r] = triad_bw(bw_a, bw_b, bw_c, BW_DOUBLES / 4);
+        tbw[r] = triad_bw(bw_a, bw_b, bw_c, bw_doubles / 4);
     }
     const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5);
-    printf("\nMemory bandwidth, one core (median of 5): read (sum of 256 MB) %.1f GB/s, triad (3 x 64 MB, 24 B/element) %.1f GB/s\n",
-           read_peak * 1e-9, triad_peak * 1e-9);
+    const double mb = sizeof(double) * (double)bw_doubles / (1 << 20);
+    printf("\nLast-level cache (sysconf): %ld KB; out-of-cache size: %.0f MB\n", sysconf(_SC_LEVEL3_CACHE_SIZE) / 1024,
+           (double)out_of_cache_bytes() / (1 << 20));
+    printf("Memory bandwidth, one core (median of 5): read (sum of %.0f MB) %.1f GB/s, triad (3 x %.0f MB, 24 B/element) %.1f GB/s\n",
+           mb, read_peak * 1e-9, mb / 4, triad_peak * 1e-9);
     if (csv) {
         fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw\n");
         fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f\n", read_peak * 1e-9, triad_peak * 1e-9);
@@ -184,9 +209,9 @@ int main(int argc, char **argv)
     const int lmaxes[3] = {0, 4, 8};
     printf("\n## Interpolation, one core: SIMD kernel (%s) vs scalar reference\n\n", isa);
     printf("Chunks of %d vertices per call (the output, %d x 3 nc doubles, stays in cache).  L2: 4^3-node grid;\n"
-           "DRAM: 48^3 (lmax 0, 4) or 32^3 (lmax 8) nodes, 127-133 MB at lmax 4-8, vertices in random order.\n"
+           "DRAM: %d^3 / %d^3 / %d^3 nodes at lmax 0 / 4 / 8 (about %.0f MB at lmax 4-8), vertices in random order.\n"
            "bytes/vertex: grid data read (8 corners); GB/s = bytes/vertex x vertices/s; of read: / read bandwidth above.\n\n",
-           CHUNK, CHUNK);
+           CHUNK, CHUNK, out_of_cache_res(0), out_of_cache_res(4), out_of_cache_res(8), (double)out_of_cache_bytes() / (1 << 20));
     printf("| lmax | method | grid | reference ns/vertex | SIMD ns/vertex | speed-up | SIMD Mvertices/s | bytes/vertex | GB/s | of read BW |\n");
     printf("|---|---|---|---|---|---|---|---|---|---|\n");
     double *out = xmalloc(sizeof(double) * CHUNK * 3 * SHL_NCOEFFS(8) * 64);
@@ -198,7 +223,7 @@ int main(int argc, char **argv)
         must(shl_ctx_create(lmax, &ctx_ref), "ctx");
         unsetenv("SHLIGHT_ISA");
         for (int big = 0; big <= 1; ++big) {
-            const int res = big ? (lmax == 8 ? 32 : 48) : 4;
+            const int res = big ? out_of_cache_res(lmax) : 4;
             shl_grid *g = make_grid(ctx, res), *gr = make_grid(ctx_ref, res);
             for (int m = 0; m < 3; ++m) {
                 /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
@@ -242,7 +267,7 @@ int main(int argc, char **argv)
         shl_ctx *ctx;
         must(shl_ctx_create(lmax, &ctx), "ctx");
         for (int big = 0; big <= 1; ++big) {
-            shl_grid *g = make_grid(ctx, big ? (lmax == 8 ? 32 : 48) : 4);
+            shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
             job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out}, j2 = j1;
             j2.nthreads = 2;
             double t1[ROUNDS], t2[ROUNDS], sp[ROUNDS];

@@ -29,7 +29,7 @@ typedef struct {
 typedef struct { double coef, grad, lane_coef, lane_grad, raw_coef, raw_grad, raw_coef_big, raw_grad_big; } errors;
 
 /* Float tolerances, 2-3 times the worst errors measured over 4000 random polygons
- * and points (RESULTS-simd.md): coefficients 2e-5 |L00| plus the float
+ * and points (bench/RESULTS.md sec. 4): coefficients 2e-5 |L00| plus the float
  * cancellation of the boundary sums (O(theta) terms over the edges adding to
  * O(theta^2), Wang 2018 Eq. 29), measured up to 1.7e-5 / theta for a polygon of
  * angular size theta = sqrt(solid angle) (shl_polygon_f: 6.6e-6 / theta, its
