@@ -470,9 +470,10 @@ int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, 
  * path (shl_polygon_grad_f, shl_sphere_grad_f: geometry in double) at every
  * point.  pts and rgb may be NULL when npts is 0; an empty set gives zeros.
  * Errors, before anything is written: NULL pointers (SHL_ENULL), npts < 0
- * (SHL_EDOMAIN), a non-finite point (SHL_ENONFINITE); one workspace per call
- * of the larger kernel workspace + 4 (nq nc + 3) 64 bytes, nq = 4 with
- * gradients, 1 without (SHL_ENOMEM).
+ * (SHL_EDOMAIN), a non-finite point (SHL_ENONFINITE); allocates one workspace
+ * per call (unless the set is empty) of the larger of the two kernels'
+ * workspaces plus 256 (nq nc + 3) bytes, nq = 4 with gradients, 1 without
+ * (SHL_ENOMEM).
  */
 int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
                             float *grad);
