@@ -213,7 +213,7 @@ static void section_wu(void)
                 "nodes.  Eval coeff: coefficients only at the 512 nodes (shl_lights_eval_batch); eval coeff & grad:\n"
                 "shl_grid_fill; interp: Hermite at every vertex; total adds shading (transfer dot products), the\n"
                 "visibility raster and resolving the image.  Reference: per-vertex analytic shading (Wang 2018, our\n"
-                "float SIMD path shl_polygon_batch_f), computed at the vertices the image uses and its time scaled to\n"
+                "float SIMD path shl_lights_eval_batch_f), computed at the vertices the image uses and its time scaled to\n"
                 "all vertices.  MAE: 8-bit sRGB images in [0,1] units (x1e-3, as the paper) and linear relative.\n"
                 "Times: best of 3 (reference: 1 run).\n\n",
             nthreads);
@@ -393,7 +393,7 @@ static void section_wang(void)
                 "Stand-ins in bench/scenes/wang-*.scene (paper triangle and light counts).  lmax 8 (the paper's\n"
                 "\"order n = 8\", 81 terms), per-vertex evaluation at every vertex, %d threads, best of 2.  Lighting:\n"
                 "the SH coefficients of all lights at every vertex - ours through shl_lights_eval_batch (double;\n"
-                "one ZH -> SH reconstruction per colour) and shl_polygon_batch_f (float SIMD), the baseline with\n"
+                "one ZH -> SH reconstruction per colour) and shl_lights_eval_batch_f (float SIMD), the baseline with\n"
                 "the monomial moments of Snyder 1996 / Arvo 1995 (bench/common/monomial.c) in the same structure.\n"
                 "Frame: lighting + shading + visibility raster + resolve (800x600).\n\n"
                 "| scene (stand-in) | triangles | vertices | lights | ours double: lighting ms / frame fps | ours float SIMD: lighting ms / fps | monomial: lighting ms / fps | monomial / ours double (lighting) | paper: ours fps | paper: monomial fps |\n"
@@ -635,7 +635,7 @@ static void section_sweep(void)
 {
     fprintf(md, "\n## What accuracy costs in time: image error vs frame time, one curve per method\n\n"
                 "Two small procedural scenes (bench/scenes/sweep-*.scene), %d threads.  Curves: per-vertex analytic\n"
-                "shading at lmax 2..14 in double (shl_lights_eval_batch) and float (shl_polygon_batch_f); grids\n"
+                "shading at lmax 2..14 in double (shl_lights_eval_batch) and float (shl_lights_eval_batch_f); grids\n"
                 "4^3..32^3 at lmax 8 with Hermite, trilinear and Taylor interpolation (float nodes) and Hermite on\n"
                 "double nodes; Monte Carlo projection with 16..65536 samples per vertex at lmax 8.  Frame: lighting\n"
                 "(+ grid fill) + shading + visibility raster + resolve, best of 2 (Monte Carlo: 1).  Errors against\n"

@@ -19,7 +19,6 @@ struct lighting {
     double (*normal)[3];          /* per polygon: unit normal (one-sided: the emitting side) */
     double *area;                 /* per polygon */
     double *cdf;                  /* MC light selection: polygons, then spheres */
-    float *verts_f;               /* ANALYTIC_F: polygon vertices in float, 3 * SHL_MAX_VERTS each */
 };
 
 const char *lighting_name(const lighting_method *m, char *buf, size_t len)
@@ -118,11 +117,6 @@ lighting *lighting_prepare(const scene *s, const lighting_method *m, const doubl
         if (!L->sample) goto fail;
         L->sample_grad = L->sample + 3 * L->nc;
         if (shl_lights_eval(L->ctx, L->set, m->point, L->sample, L->sample_grad) != SHL_OK) goto fail;
-    } else if (m->kind == LM_ANALYTIC_F) {
-        L->verts_f = malloc(sizeof(float) * 3 * SHL_MAX_VERTS * (size_t)(np + 1));
-        if (!L->verts_f) goto fail;
-        for (int i = 0; i < np; ++i)
-            for (int k = 0; k < 3 * s->polys[i].n; ++k) L->verts_f[3 * SHL_MAX_VERTS * i + k] = (float)s->polys[i].v[k];
     } else if (m->kind == LM_MONOMIAL) {
         /* the baseline fills its Legendre table on first use: do it before any thread runs */
         shl__poly_geom g;
@@ -148,7 +142,6 @@ void lighting_free(lighting *L)
     free(L->normal);
     free(L->area);
     free(L->cdf);
-    free(L->verts_f);
     free(L);
 }
 
@@ -263,34 +256,17 @@ static void eval_block(void *arg, long begin, long end, int worker)
     const int nc = L->nc, nb = (int)(end - begin);
     const double *pts = j->pts + 3 * begin;
     double *out = malloc(sizeof(double) * 3 * (size_t)nc * BLOCK), *acc = malloc(sizeof(double) * 3 * SHL__ZH_BLOCK);
-    float *pf = malloc(sizeof(float) * (3 + (size_t)nc) * BLOCK);
+    float *pf = malloc(sizeof(float) * (3 + 3 * (size_t)nc) * BLOCK);
     if (!out || !acc || !pf) goto fail;
     switch (L->m.kind) {
     case LM_ANALYTIC:
         if (shl_lights_eval_batch(L->ctx, L->set, nb, pts, out, NULL) != SHL_OK) goto fail;
         break;
-    case LM_ANALYTIC_F: {
+    case LM_ANALYTIC_F: { /* the set in float through the SIMD kernels */
         float *c = pf + 3 * BLOCK;
         for (int k = 0; k < 3 * nb; ++k) pf[k] = (float)pts[k];
-        memset(out, 0, sizeof(double) * 3 * (size_t)nc * (size_t)nb);
-        for (int i = 0; i < L->s->npolys; ++i) {
-            const scene_polygon *q = &L->s->polys[i];
-            if (shl_polygon_batch_f(L->ctx, L->verts_f + 3 * SHL_MAX_VERTS * i, q->n, nb, pf, c, NULL) != SHL_OK) goto fail;
-            for (int p = 0; p < nb; ++p) {
-                if (!lit_side(L, i, pts + 3 * p)) continue;
-                for (int ch = 0; ch < 3; ++ch)
-                    for (int k = 0; k < nc; ++k) out[(3 * (size_t)p + ch) * nc + k] += q->rgb[ch] * c[(size_t)p * nc + k];
-            }
-        }
-        for (int i = 0; i < L->s->nspheres; ++i) {
-            const scene_sphere *sp = &L->s->spheres[i];
-            const float cen[3] = {(float)sp->center[0], (float)sp->center[1], (float)sp->center[2]};
-            for (int p = 0; p < nb; ++p) {
-                if (shl_sphere_f(L->ctx, pf + 3 * p, cen, (float)sp->radius, c) != SHL_OK) goto fail;
-                for (int ch = 0; ch < 3; ++ch)
-                    for (int k = 0; k < nc; ++k) out[(3 * (size_t)p + ch) * nc + k] += sp->rgb[ch] * c[k];
-            }
-        }
+        if (shl_lights_eval_batch_f(L->ctx, L->set, nb, pf, c, NULL) != SHL_OK) goto fail;
+        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) out[k] = c[k];
         break;
     }
     case LM_GRID:
