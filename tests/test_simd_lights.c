@@ -5,13 +5,14 @@
  * Tolerance: the set's result is the sum over lights of rgb_c times each
  * light's unit-radiance result, so its error is at most the sum of the lights'
  * own errors times |rgb_c|, plus the float summation (n lights x FLT_EPSILON x
- * sum |terms|, |L_lm| <= sqrt(2l+1) |L00|: < 1e-5 |L00| for the 9 lights and
- * lmax <= 14 here).  Each light's error is bounded by the tolerance its own
- * batch test states: polygons (test_simd.c) 2e-5 + 4e-5/theta of |L00| and
- * 1e-4 + 5e-5/theta of max|grad| (theta = sqrt(solid angle)), spheres
- * (test_simd_sphere_interp.c) 2e-5 |L00| and 1e-5 max|grad| up to lmax 14,
- * 1.5e-4 and 3e-5 above.  Per light, |L00| and max|grad| come from
- * shl_polygon_grad / shl_sphere_grad in double.  The floor 16 FLT_MIN per light
+ * sum |terms|, |L_lm| <= sqrt(2l+1) |L00|: < 4e-6 sum |rgb| |L00| for the 8
+ * lights and lmax <= 30 here, well inside the per-light tolerances).  Each
+ * light's error is bounded by the tolerance its own batch test states:
+ * polygons (test_simd.c) 2e-5 + 4e-5/theta of |L00| and 1e-4 + 5e-5/theta of
+ * max|grad| (theta = sqrt(solid angle)), spheres (test_simd_sphere_interp.c)
+ * 2e-5 |L00| and 1e-5 max|grad| up to lmax 14, 1.5e-4 and 3e-5 above.  Per
+ * light, |L00| and max|grad| come from shl_polygon_grad / shl_sphere_grad in
+ * double.  The floor 16 FLT_MIN per light
  * admits results below float range (the gradient of a light 1e100 away). */
 #include "geom.h"
 #include "isa_ctx.h"
