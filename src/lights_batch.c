@@ -13,9 +13,11 @@
 
 enum { CHUNK = 64 }; /* points per pass over the lights: a multiple of every vector length */
 
-/* The polygon kernel's float geometry takes vertices with coordinates up to 2^126
- * and an extent of at least 2^-126 (float input always qualifies: see
- * shl__batch_poly_prepare); others take the scalar float path per point. */
+/* Double vertices the polygon kernel takes: coordinates up to 2^126 and an extent
+ * of at least 2^-126, so that the scaled vertices and points (times at most 2^126)
+ * and their squared distances stay within the double range (float input, up to
+ * 2^128 with extents down to 2^-149, is within it too; shl_polygon_batch_f).
+ * Other polygons take the scalar float path per point. */
 static int poly_kernel_range(const double *v, int n)
 {
     double ext = 0.0;
