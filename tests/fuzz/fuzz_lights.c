@@ -15,10 +15,14 @@
  *    shl_sphere_grad (one-sided polygons: only where n . (x - v_0) > 0, n the
  *    documented Newell normal), to 1e-9 of sum_i |rgb_ic| x (light i's scale):
  *    the set reconstructs accumulated lobe integrals once (reconstruction
- *    condition <= 22.8), test_lights.c measures 1.5e-15; plus sum_i |rgb_ic| 16
- *    DBL_MIN: unit-radiance results and their lobe integrals that fall into
- *    gradual underflow (a light 2^1000 extents away) are accurate only to a few
- *    DBL_TRUE_MIN per operation (far below DBL_MIN), which a huge rgb magnifies;
+ *    condition <= 22.8), test_lights.c measures 1.5e-15; plus, for lights whose
+ *    L_00 (their solid angle) is in gradual underflow, |rgb_ic| x (light i's
+ *    scale) x 4096 DBL_TRUE_MIN / |L_00,i|: their lobe integrals are subnormal,
+ *    each accurate only to a few DBL_TRUE_MIN per operation (O(100) operations,
+ *    times the reconstruction's condition number 22.8), and so are their
+ *    gradients, however large the scaling back to x units makes these (a
+ *    sphere of radius 1e-312 seen from 1e-154); 0 above L_00 ~ 1e-311; and
+ *    sum_i |rgb_ic| 16 DBL_MIN absolute, which a huge rgb magnifies;
  *  - finite outputs whenever sum |rgb| 4 pi K_30 (n for raw polygons) stays
  *    below 1e290 (any coordinates: the geometry is scaled by powers of two);
  *  - with structured polygons and spheres: |rgb_c,lm| <= sum_i |rgb_ic| (K_l
@@ -240,6 +244,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const double *x = pts + 3 * p;
         long double *sum = calloc((size_t)12 * nc, sizeof(long double)), *scale = calloc(4 * 3, sizeof(long double));
         long double floor_c[3] = {1e-300L, 1e-300L, 1e-300L}; /* + sum_i |rgb_ic| 16 DBL_MIN: underflowed unit results */
+        long double under[6] = {0.0L, 0.0L, 0.0L, 0.0L, 0.0L, 0.0L}; /* coefficients, gradients per colour: subnormal lights */
         double *lc = malloc(sizeof(double) * nc), *lg = malloc(sizeof(double) * 3 * nc);
         int comparable = 1, bounded = all_structured;
         long double *bound = calloc((size_t)3 * nc, sizeof(long double)), gfinite = 0.0L;
@@ -261,7 +266,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             for (int k = 0; k < 3 * nc; ++k) gsc = isfinite(lg[k]) ? fmaxl(gsc, fabsl(lg[k])) : INFINITY;
             /* light i's scale: its largest coefficient, or its solid angle K_0^-1 L_00 (spheres: L_00 / K_0) */
             sc = fmaxl(sc, fabsl(lc[0]) / fz_kl(0) * fz_kl(lmax));
+            const long double rel_under = lc[0] != 0.0 ? fminl(1.0L, 4096.0L * 0x1p-1074L / fabsl(lc[0])) : 1.0L;
             for (int c = 0; c < 3; ++c) {
+                under[c] += fabsl(li->rgb[c]) * sc * rel_under;
+                under[3 + c] += li->rgb[c] == 0.0 ? 0.0L : fabsl(li->rgb[c]) * gsc * rel_under;
                 for (int k = 0; k < nc; ++k) sum[c * nc + k] += (long double)li->rgb[c] * lc[k];
                 for (int k = 0; k < 3 * nc; ++k) sum[3 * nc + c * 3 * nc + k] += (long double)li->rgb[c] * lg[k];
                 scale[c] += fabsl(li->rgb[c]) * sc;
@@ -292,13 +300,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (with_grad && gfinite < 1e290L) FUZZ_CHECK(all_finite_d(og, 9 * nc), "non-finite gradient at point %d", p);
         for (int c = 0; c < 3 && comparable; ++c)
             for (int k = 0; k < nc; ++k)
-                FUZZ_CHECK(fabsl(o[c * nc + k] - sum[c * nc + k]) <= 1e-9L * scale[c] + floor_c[c],
+                FUZZ_CHECK(fabsl(o[c * nc + k] - sum[c * nc + k]) <= 1e-9L * scale[c] + under[c] + floor_c[c],
                            "set vs sum of lights: rgb[%d][%d] %.17g vs %.17Lg (scale %.3Lg)", c, k, o[c * nc + k],
                            sum[c * nc + k], scale[c]);
         for (int c = 0; c < 3 && comparable && with_grad; ++c)
             for (int k = 0; k < 3 * nc; ++k)
                 if (isfinite(og[c * 3 * nc + k]) && isfinite(scale[3 + c]))
-                    FUZZ_CHECK(fabsl(og[c * 3 * nc + k] - sum[3 * nc + c * 3 * nc + k]) <= 1e-9L * scale[3 + c] + floor_c[c],
+                    FUZZ_CHECK(fabsl(og[c * 3 * nc + k] - sum[3 * nc + c * 3 * nc + k]) <= 1e-9L * scale[3 + c] + under[3 + c] + floor_c[c],
                                "set vs sum of lights: grad[%d][%d] %.17g vs %.17Lg (scale %.3Lg)", c, k, og[c * 3 * nc + k],
                                sum[3 * nc + c * 3 * nc + k], scale[3 + c]);
         for (int k = 0; bounded && k < 3 * nc; ++k)
