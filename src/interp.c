@@ -49,21 +49,23 @@ static void trilinear_weights(point_setup *s)
 }
 
 /* Annen 2004 Eq. (16), w_j = |p - p_j|^-b / sum_i |p - p_i|^-b, evaluated as
- * (d_min / d_j)^b normalized so that nothing overflows; at a node, its value. */
+ * (d_min / d_j)^b normalized so that nothing overflows; at a node, its value.
+ * Each distance is taken as m_j |d_j / m_j| / 2, m_j its largest component: the
+ * weights are ratios, and squares of huge or tiny components would over/underflow,
+ * as would a common unit when the cell's sides differ by more than ~2^1000. */
 static void taylor_weights(const shl_grid *g, double b, point_setup *s)
 {
     double d[8][3], dist[8], dmin = INFINITY, sum = 0.0;
-    /* distances in units of 2^e, the largest spacing in [2^e, 2^(e+1)) (h > 0: shl_grid_create):
-     * the weights are ratios, and squares of huge or tiny cells would over/underflow */
-    const int e = shl__ilogb(fmax(g->h[0], fmax(g->h[1], g->h[2])));
-    const double hs[3] = {shl__ldexp(g->h[0], -e), shl__ldexp(g->h[1], -e), shl__ldexp(g->h[2], -e)};
     for (int j = 0; j < 8; ++j) {
-        double ds[3];
+        double m = 0.0;
         for (int a = 0; a < 3; ++a) {
             d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
-            ds[a] = (s->u[a] - ((j >> a) & 1)) * hs[a];
+            m = fmax(m, fabs(d[j][a]));
         }
-        dist[j] = sqrt(ds[0] * ds[0] + ds[1] * ds[1] + ds[2] * ds[2]);
+        double q = 0.0;
+        if (m > 0.0)
+            for (int a = 0; a < 3; ++a) q += (d[j][a] / m) * (d[j][a] / m);
+        dist[j] = 0.5 * m * sqrt(q); /* <= DBL_MAX sqrt(3) / 2 */
         dmin = fmin(dmin, dist[j]);
     }
     for (int j = 0; j < 8; ++j) {

@@ -4,6 +4,7 @@
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -684,5 +685,52 @@ SHL_TEST(grid_taylor_extreme_cells)
     }
     CHECK(bad == 0 && all_finite(ref, 2 * N1));
     harness_note("cells 2^-1000..2^1000: %d of 4 scales differ from scale 1", bad);
+    shl_ctx_destroy(ctx);
+}
+
+/* Taylor weights of a sliver cell, x side 2^-1000, y and z sides 2^100 (found by
+ * fuzz_grid: distances in one unit for all three sides lost the x component, so
+ * a node was averaged with its x neighbour).  Closed forms: at each corner the
+ * node's value exactly (Annen 2004 Eq. 16 with d_j = 0); at the middle of an
+ * x edge the two ends weigh 1/2 each and the others (2^-1001 / 2^100)^b = 0,
+ * so c = (c_0 + g_0 . d_0 + c_1 + g_1 . d_1) / 2 with d = -+(h_x / 2, 0, 0). */
+SHL_TEST(grid_taylor_sliver_cell)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(1, &ctx) == SHL_OK);
+    enum { N1 = 3 * SHL_NCOEFFS(1) };
+    const double hx = ldexp(1.0, -1000), hy = ldexp(1.0, 100);
+    const double lo[3] = {0.0, -hy, 0.0}, hi[3] = {hx, 0.0, hy};
+    const int res[3] = {2, 2, 2};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    double v[8][N1], gr[8][3 * N1];
+    for (int n = 0; n < 8; ++n) {
+        const int idx[3] = {n & 1, (n >> 1) & 1, n >> 2};
+        for (int i = 0; i < N1; ++i) v[n][i] = 0.125 * ((n * 7 + i * 3) % 11) - 0.5;
+        for (int i = 0; i < 3 * N1; ++i) gr[n][i] = ldexp(0.25 * ((n * 5 + i) % 7) - 0.75, 990);
+        CHECK(shl_grid_set_node(g, idx, v[n], gr[n]) == SHL_OK);
+    }
+    double max_corner = 0.0, max_edge = 0.0, out[N1];
+    const double hxg = hi[0] - lo[0];
+    for (int n = 0; n < 8; ++n) {
+        const double p[3] = {n & 1 ? hi[0] : lo[0], n & 2 ? hi[1] : lo[1], n & 4 ? hi[2] : lo[2]};
+        CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, 2.0, 1, p, out, 1) == SHL_OK);
+        for (int i = 0; i < N1; ++i) max_corner = fmax(max_corner, fabs(out[i] - v[n][i]));
+    }
+    for (int n = 0; n < 8; n += 2) { /* the x edge from node n to node n + 1 */
+        const double p[3] = {lo[0] + 0.5 * hxg, n & 2 ? hi[1] : lo[1], n & 4 ? hi[2] : lo[2]};
+        CHECK(shl_grid_interp(g, SHL_INTERP_TAYLOR, 2.0, 1, p, out, 1) == SHL_OK);
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < N1 / 3; ++k) {
+                const int i = c * (N1 / 3) + k, ix = 3 * c * (N1 / 3) + k; /* d value i / dx (layout of shl_lights_eval) */
+                const double want = 0.5 * (v[n][i] + gr[n][ix] * (0.5 * hxg) + v[n + 1][i] - gr[n + 1][ix] * (0.5 * hxg));
+                max_edge = fmax(max_edge, fabs(out[i] - want) / (fabs(v[n][i]) + fabs(v[n + 1][i]) + 1.0));
+            }
+    }
+    CHECK(max_corner == 0.0);
+    CHECK(max_edge <= 8.0 * DBL_EPSILON);
+    harness_note("sliver cell 2^-1000 x 2^100 x 2^100: corners exact (max err %.1e), x-edge midpoints %.1e of scale",
+                 max_corner, max_edge);
+    shl_grid_destroy(g);
     shl_ctx_destroy(ctx);
 }
