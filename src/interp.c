@@ -50,26 +50,40 @@ static void trilinear_weights(point_setup *s)
 
 /* Annen 2004 Eq. (16), w_j = |p - p_j|^-b / sum_i |p - p_i|^-b, evaluated as
  * (d_min / d_j)^b normalized so that nothing overflows; at a node, its value.
- * Each distance is taken as m_j |d_j / m_j| / 2, m_j its largest component: the
- * weights are ratios, and squares of huge or tiny components would over/underflow,
- * as would a common unit when the cell's sides differ by more than ~2^1000. */
+ * Each distance is held as r_j 2^e_j, r_j in [1, 2), from its components in
+ * units of their largest one's power of two: squares of huge or tiny components
+ * would over/underflow, and so would a common unit when the cell's sides differ
+ * by more than ~2^1000.  The ratios d_min / d_j are then exact scalings. */
 static void taylor_weights(const shl_grid *g, double b, point_setup *s)
 {
-    double d[8][3], dist[8], dmin = INFINITY, sum = 0.0;
+    double d[8][3], r[8], sum = 0.0;
+    int e[8], nearest = -1, at_node = 0;
     for (int j = 0; j < 8; ++j) {
-        double m = 0.0;
+        double m = 0.0, q = 0.0;
         for (int a = 0; a < 3; ++a) {
             d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
             m = fmax(m, fabs(d[j][a]));
         }
-        double q = 0.0;
-        if (m > 0.0)
-            for (int a = 0; a < 3; ++a) q += (d[j][a] / m) * (d[j][a] / m);
-        dist[j] = 0.5 * m * sqrt(q); /* <= DBL_MAX sqrt(3) / 2 */
-        dmin = fmin(dmin, dist[j]);
+        r[j] = 0.0;
+        e[j] = 0;
+        if (m == 0.0) { /* p is node j */
+            at_node = 1;
+            continue;
+        }
+        e[j] = shl__ilogb(m);
+        for (int a = 0; a < 3; ++a) {
+            const double ds = shl__ldexp(d[j][a], -e[j]);
+            q += ds * ds;
+        }
+        r[j] = sqrt(q); /* in [1, 2 sqrt(3)) */
+        if (r[j] >= 2.0) {
+            r[j] *= 0.5;
+            ++e[j];
+        }
+        if (nearest < 0 || e[j] < e[nearest] || (e[j] == e[nearest] && r[j] < r[nearest])) nearest = j;
     }
     for (int j = 0; j < 8; ++j) {
-        s->w[j] = dmin > 0.0 ? pow(dmin / dist[j], b) : (double)(dist[j] == 0.0);
+        s->w[j] = at_node ? (double)(r[j] == 0.0) : pow(shl__ldexp(r[nearest] / r[j], e[nearest] - e[j]), b);
         sum += s->w[j];
     }
     for (int j = 0; j < 8; ++j) {
