@@ -4,6 +4,7 @@
 #include "../simd/batch.h"
 #include "grid.h"
 #include "parallel.h"
+#include <limits.h>
 #include <math.h>
 
 /* Per-point quantities shared by the kernels of interp_kernel.h and simd/interp_batch.h. */
@@ -50,40 +51,50 @@ static void trilinear_weights(point_setup *s)
 
 /* Annen 2004 Eq. (16), w_j = |p - p_j|^-b / sum_i |p - p_i|^-b, evaluated as
  * (d_min / d_j)^b normalized so that nothing overflows; at a node, its value.
- * Each distance is held as r_j 2^e_j, r_j in [1, 2), from its components in
- * units of their largest one's power of two: squares of huge or tiny components
- * would over/underflow, and so would a common unit when the cell's sides differ
- * by more than ~2^1000.  The ratios d_min / d_j are then exact scalings. */
+ * Each distance is held as r_j 2^e_j, r_j in [1, 2 sqrt 3), from its components
+ * in units of 2^e_j, the largest one's power of two: squares of huge or tiny
+ * components would over/underflow, and so would a common unit when the cell's
+ * sides differ by more than ~2^1000.  The ratios d_min / d_j are then exact
+ * scalings.  The nearest corner is found without branches (mispredicted on random
+ * points, they cost 20% of the set-up). */
 static void taylor_weights(const shl_grid *g, double b, point_setup *s)
 {
-    double d[8][3], r[8], sum = 0.0;
-    int e[8], nearest = -1, at_node = 0;
+    double d[8][3], r[8], rmin = INFINITY, sum = 0.0;
+    int e[8], emin = INT_MAX, at_node = 0;
     for (int j = 0; j < 8; ++j) {
         double m = 0.0, q = 0.0;
         for (int a = 0; a < 3; ++a) {
             d[j][a] = (s->u[a] - ((j >> a) & 1)) * g->h[a];
-            m = fmax(m, fabs(d[j][a]));
+            m = fabs(d[j][a]) > m ? fabs(d[j][a]) : m; /* finite: not the fmax call */
         }
-        r[j] = 0.0;
-        e[j] = 0;
         if (m == 0.0) { /* p is node j */
             at_node = 1;
+            r[j] = 0.0;
+            e[j] = 0;
             continue;
         }
         e[j] = shl__ilogb(m);
+        double unit[2]; /* 2^-e_j, as two factors where it exceeds the double range (m subnormal) */
+        if (e[j] >= -1022) {
+            unit[0] = shl__ldexp(1.0, -e[j]);
+            unit[1] = 1.0;
+        } else
+            shl__pow2_split(-e[j], unit);
         for (int a = 0; a < 3; ++a) {
-            const double ds = shl__ldexp(d[j][a], -e[j]);
+            const double ds = d[j][a] * unit[0] * unit[1];
             q += ds * ds;
         }
-        r[j] = sqrt(q); /* in [1, 2 sqrt(3)) */
-        if (r[j] >= 2.0) {
-            r[j] *= 0.5;
-            ++e[j];
-        }
-        if (nearest < 0 || e[j] < e[nearest] || (e[j] == e[nearest] && r[j] < r[nearest])) nearest = j;
+        r[j] = sqrt(q);
+        emin = e[j] < emin ? e[j] : emin;
     }
+    if (!at_node) /* d_min = rmin 2^emin: a corner with e_j >= emin + 2 is farther than every one at emin */
+        for (int j = 0; j < 8; ++j) {
+            const int shift = e[j] - emin < 2 ? e[j] - emin : 2;
+            const double key = r[j] * (double)(1 << shift);
+            rmin = key < rmin ? key : rmin;
+        }
     for (int j = 0; j < 8; ++j) {
-        s->w[j] = at_node ? (double)(r[j] == 0.0) : pow(shl__ldexp(r[nearest] / r[j], e[nearest] - e[j]), b);
+        s->w[j] = at_node ? (double)(r[j] == 0.0) : pow(shl__ldexp(rmin / r[j], emin - e[j]), b);
         sum += s->w[j];
     }
     for (int j = 0; j < 8; ++j) {
