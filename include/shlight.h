@@ -377,7 +377,15 @@ typedef struct {
  * the angle acos(cos_theta) with the normal that lies above the horizon:
  *   H = S((a + pi/2 - clamp(theta, pi/2 - a, pi/2 + a)) / (2a)),  S(x) = 3x^2 - 2x^3.
  * (The paper prints the lower clamp bound as a - pi/2; pi/2 - a is the bound
- * that keeps the argument of S in [0, 1].)  H = 1 or 0 (step) when a = 0.
+ * that keeps the argument of S in [0, 1].)  Evaluated as S((a + asin(cos_theta)) / (2a))
+ * (pi/2 - theta = asin(cos_theta): no cancellation for small a), within 1e-12 (in
+ * fact ~5e-16) of S at the exact argument, monotone non-decreasing in cos_theta,
+ * in [0, 1]; exactly 1 when the cap is entirely above the horizon
+ * (asin(cos_theta) >= a) and exactly 0 when entirely below, whatever a.  a = 0
+ * (a point): 1 for cos_theta > 0, 0 for cos_theta < 0, 1/2 for cos_theta = +-0 (the
+ * limit a -> 0, as H = 1/2 at cos_theta = 0 for every a).  Errors (nothing
+ * written): SHL_ENULL, SHL_ENONFINITE, SHL_EDOMAIN for |cos_theta| > 1 or a outside
+ * [0, pi/2] (pi/2 as the double 0.5 * M_PI).
  */
 int shl_hvl_overlap(double cos_theta, double half_angle, double *h);
 

@@ -6,6 +6,7 @@
 #include "harness.h"
 #include "rotutil.h"
 #include "shlight.h"
+#include <float.h>
 #include <math.h>
 
 enum { L = SHL_LMAX_MAX, NC = SHL_NCOEFFS(SHL_LMAX_MAX) };
@@ -404,6 +405,221 @@ SHL_TEST(hvl_overlap_factor)
     CHECK(shl_hvl_overlap(NAN, 0.3, &g) == SHL_ENONFINITE);
     CHECK(shl_hvl_overlap(0.5, 0.3, NULL) == SHL_ENULL);
     CHECK(g == GUARD_VALUE);
+}
+
+/* ---- H for small caps (issue 20) ------------------------------------------
+ * Independent reference: asin(c) of the double c by its Taylor series in long
+ * double, sum_n binom(2n, n) / (4^n (2n + 1)) x^(2n+1) for |x| <= 1/2 (term ratio
+ * x^2 (2n-1)^2 / (2n (2n+1)) < 1/4: 40 terms leave 4^-40 ~ 1e-24 relative), and
+ * pi/2 - 2 asin(sqrt((1 - |c|) / 2)) above (1 - |c| exact); then
+ * S(clamp((a + asin c) / (2a), 0, 1)) in long double.  Its own error: a few
+ * LDBL_EPSILON, absolute, in S.
+ * Error of the library (src/hvl.c): asin within 1 ulp (glibc, musl), so
+ * e = asin(c) is off by <= 2^-52 |e| < 2^-52 a inside the band; w = (a - |e|) / (2a)
+ * rounds twice: |dw| <= 2^-52 a / (2a) + 2 * 2^-53 w <= 2^-52 (w <= 1/2); S' <= 3/2,
+ * and the final roundings of S (<= 2^-55 + 2^-100) and of 1 - S (2^-53):
+ * |H - H_exact| <= 1.5 * 2^-52 + 2^-53 + 2^-55 < 2.4 DBL_EPSILON, plus the 3e-30 of
+ * the edge flush.  Tolerance 3 DBL_EPSILON + 16 LDBL_EPSILON (the issue asks 1e-12). */
+static long double asin_series(long double x)
+{
+    long double term = x, sum = x;
+    const long double x2 = x * x;
+    for (int n = 1; n <= 40; ++n) {
+        term *= x2 * (2.0L * n - 1.0L) * (2.0L * n - 1.0L) / ((2.0L * n) * (2.0L * n + 1.0L));
+        sum += term;
+    }
+    return sum;
+}
+
+static long double asin_ref(double c)
+{
+    const long double ac = fabsl((long double)c);
+    if (ac <= 0.5L) return asin_series(c);
+    const long double r = 1.570796326794896619231321691639751442L - 2.0L * asin_series(sqrtl((1.0L - ac) / 2.0L));
+    return c < 0.0 ? -r : r;
+}
+
+static long double smoothstep_ref(long double x)
+{
+    if (x <= 0.0L) return 0.0L;
+    if (x >= 1.0L) return 1.0L;
+    return x * x * (3.0L - 2.0L * x);
+}
+
+#define H_TOL (3.0 * DBL_EPSILON + 16.0 * LDBL_EPSILON)
+
+/* H(c, a) against the reference; beyond an edge (by more than the reference's
+ * error) H must be exactly 1 or 0.  Returns |H - H_ref|. */
+static double check_overlap_at(double c, double a)
+{
+    double h = -1.0;
+    CHECK(shl_hvl_overlap(c, a, &h) == SHL_OK);
+    const long double e = asin_ref(c), margin = 8.0L * LDBL_EPSILON * a;
+    const double err = (double)fabsl((long double)h - smoothstep_ref(((long double)a + e) / (2.0L * a)));
+    if (!(err <= H_TOL && h >= 0.0 && h <= 1.0))
+        harness_fail(__FILE__, __LINE__, "H(%a, %a) = %.17g, |err| %.3g", c, a, h, err);
+    if (e > a + margin && h != 1.0) harness_fail(__FILE__, __LINE__, "cap above: H(%a, %a) = %.17g != 1", c, a, h);
+    if (e < -a - margin && h != 0.0) harness_fail(__FILE__, __LINE__, "cap below: H(%a, %a) = %.17g != 0", c, a, h);
+    return err;
+}
+
+SHL_TEST(hvl_overlap_small_caps)
+{
+    /* the table of issue 20 */
+    static const struct { double c, a, want; } tab[] = {
+        {1.0, 1.2e-16, 1.0}, {1.0, 1e-15, 1.0}, {0.5, 1e-16, 1.0}, {1.0, 1e-300, 1.0}, {0.0, 1e-9, 0.5},
+        {5e-7, 1e-6, 0.84375}};
+    for (size_t i = 0; i < sizeof tab / sizeof *tab; ++i) {
+        double h = -1.0;
+        CHECK(shl_hvl_overlap(tab[i].c, tab[i].a, &h) == SHL_OK);
+        CHECK_NEAR(h, tab[i].want, 1e-12); /* the issue's values, rounded: 0.84375 is 0.84375 + 1.2e-14 */
+        check_overlap_at(tab[i].c, tab[i].a);
+    }
+    /* Tiny caps in closed form: c = delta with |delta| <= 2a <= 2^-29, where
+     * asin(delta) = delta (1 + delta^2/6 + ...) and the exact argument is
+     * (a + delta) / (2a) + O(a^2) (< 2^-58): no asin in the reference at all.
+     * delta at k/16 of a, and at +-a and 1 ulp either side of +-a. */
+    static const double tiny[] = {0x1p-1074, 1e-320, 1e-310, DBL_MIN, 1e-300, 1e-200, 1e-100, 1e-30,
+                                  1e-16, 1.2e-16, 1e-15, 1e-12, 1e-9, 0x1p-30};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof tiny / sizeof *tiny; ++i) {
+        const double a = tiny[i];
+        double deltas[41 + 6];
+        int nd = 0;
+        for (int k = -20; k <= 20; ++k) deltas[nd++] = k * (a / 16.0);
+        for (int sg = -1; sg <= 1; sg += 2) {
+            deltas[nd++] = sg * a;
+            deltas[nd++] = nextafter(sg * a, 0.0);
+            deltas[nd++] = nextafter(sg * a, sg * 1.0);
+        }
+        for (int k = 0; k < nd; ++k) {
+            const double d = deltas[k];
+            double h = -1.0;
+            CHECK(shl_hvl_overlap(d, a, &h) == SHL_OK);
+            const long double x = ((long double)a + d) / (2.0L * a);
+            const double err = (double)fabsl((long double)h - smoothstep_ref(x));
+            worst = fmax(worst, err);
+            if (!(err <= H_TOL)) harness_fail(__FILE__, __LINE__, "H(%a, %a) = %.17g, |err| %.3g", d, a, h, err);
+            if (fabs(d) >= a) CHECK(h == (d > 0.0 ? 1.0 : 0.0)); /* asin(delta) beyond +-a */
+            /* 1 ulp inside an edge (normal a): w ~ 2^-53, flushed, exact H within 1e-31 of 0 or 1 */
+            if (a >= DBL_MIN && fabs(d) < a && fabs(d) == nextafter(a, 0.0)) CHECK(h == (d > 0.0 ? 1.0 : 0.0));
+        }
+    }
+    harness_note("tiny caps (a 5e-324..2^-30) vs closed form: max |err| %.1e", worst);
+    /* a = 0: a point light; cap-less step with 1/2 on the horizon (the limit a -> 0) */
+    double h = -1.0;
+    CHECK(shl_hvl_overlap(0x1p-1074, 0.0, &h) == SHL_OK && h == 1.0);
+    CHECK(shl_hvl_overlap(-0x1p-1074, 0.0, &h) == SHL_OK && h == 0.0);
+    CHECK(shl_hvl_overlap(0.0, 0.0, &h) == SHL_OK && h == 0.5);
+    CHECK(shl_hvl_overlap(-0.0, -0.0, &h) == SHL_OK && h == 0.5);
+    CHECK(shl_hvl_overlap(1.0, 0.0, &h) == SHL_OK && h == 1.0);
+    CHECK(shl_hvl_overlap(-1.0, 0.0, &h) == SHL_OK && h == 0.0);
+    /* invalid input: status, nothing written */
+    double g = GUARD_VALUE;
+    CHECK(shl_hvl_overlap(nextafter(1.0, 2.0), 0.3, &g) == SHL_EDOMAIN);
+    CHECK(shl_hvl_overlap(0.5, nextafter(0.5 * M_PI, 2.0), &g) == SHL_EDOMAIN);
+    CHECK(shl_hvl_overlap(0.5, -0x1p-1074, &g) == SHL_EDOMAIN);
+    CHECK(shl_hvl_overlap(INFINITY, 0.3, &g) == SHL_ENONFINITE);
+    CHECK(shl_hvl_overlap(0.5, NAN, &g) == SHL_ENONFINITE);
+    CHECK(g == GUARD_VALUE);
+}
+
+/* Ordinary and small caps against the series reference: c = sin(k a / 16) across
+ * and beyond the band, the edges +-sin(a) and 4 ulps either side, +-1, 0. */
+SHL_TEST(hvl_overlap_vs_series)
+{
+    static const double as[] = {1e-300, 1e-16, 1e-9, 1e-6, 1e-3, 0.05, 0.3, 0.7, 1.0, 1.3, 1.5, 1.5707963267948963,
+                                0.5 * M_PI};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof as / sizeof *as; ++i) {
+        const double a = as[i];
+        for (int k = -24; k <= 24; ++k) worst = fmax(worst, check_overlap_at(sin(k * a / 16.0), a));
+        for (int sg = -1; sg <= 1; sg += 2) {
+            double c = sg * sin(a);
+            for (int j = 0; j < 4; ++j) c = nextafter(c, -2.0);
+            for (int j = 0; j <= 8; ++j, c = nextafter(c, 2.0))
+                if (fabs(c) <= 1.0) worst = fmax(worst, check_overlap_at(c, a));
+        }
+        worst = fmax(worst, check_overlap_at(1.0, a));
+        worst = fmax(worst, check_overlap_at(-1.0, a));
+        worst = fmax(worst, check_overlap_at(0.0, a));
+    }
+    harness_note("a 1e-300..pi/2 vs long-double series: max |err| %.1e (%.2f eps)", worst, worst / DBL_EPSILON);
+}
+
+/* Property sweep (fixed seed): for 150 half-angles (log-uniform 2^-1074..pi/2,
+ * the ends, powers of 2), runs of 4000 consecutive doubles c centred on the edges
+ * +-sin(a), on sin(f a) for f = +-0.5, +-0.1, +-0.02 (near the middle, where the
+ * plain product w^2 (3 - 2w) steps down by an ulp up to 62 times in such a run)
+ * and on a random point, plus 2001 points across [-1, 1]: H in [0, 1], monotone
+ * non-decreasing along each run, and every 7th within H_TOL of the reference. */
+SHL_TEST(hvl_overlap_monotone_sweep)
+{
+    static const double fixed[] = {0.5 * M_PI, 0x1p-1074, 1.0, 0.5, 0x1p-20, 0x1p-1000};
+    static const double frac[] = {-1.0, -0.5, -0.1, -0.02, 0.02, 0.1, 0.5, 1.0};
+    enum { NF = sizeof fixed / sizeof *fixed, NW = sizeof frac / sizeof *frac, RUN = 4000 };
+    rng_t r = {2020};
+    double worst = 0.0;
+    long n = 0;
+    for (int i = 0; i < 150; ++i) {
+        double a = i < NF ? fixed[i] : ldexp(rng_uniform(&r) + 0.5, -(int)(rng_uniform(&r) * 1074.0));
+        if (a > 0.5 * M_PI) a = 0.5 * M_PI;
+        for (int s = 0; s <= NW + 1; ++s) {
+            double c = s < NW ? sin(frac[s] * a) : (s == NW ? rng_range(&r, -1.0, 1.0) : -1.0), prev = 0.0;
+            for (int j = 0; j < RUN / 2 && c > -1.0; ++j) c = nextafter(c, -2.0);
+            const int len = s <= NW ? RUN : 2001;
+            for (int j = 0; j < len && c <= 1.0; ++j) {
+                double h = -1.0;
+                CHECK(shl_hvl_overlap(c, a, &h) == SHL_OK);
+                if (!(h >= prev && h <= 1.0))
+                    harness_fail(__FILE__, __LINE__, "a %a: H(%a) = %a after %a", a, c, h, prev);
+                if (j % 7 == 0) worst = fmax(worst, check_overlap_at(c, a));
+                prev = h;
+                ++n;
+                c = s <= NW ? nextafter(c, 2.0) : -1.0 + (j + 1) / 1000.0;
+            }
+        }
+        if (harness_failed_current()) break;
+    }
+    harness_note("%ld evaluations monotone in [0, 1]; every 7th vs series: max |err| %.1e", n, worst);
+}
+
+/* shl_hvl_shade with a small HVL entirely above the horizon (H must be 1; the old
+ * Eq. 22 gave 0 or -2.4 for a ~ 1e-16): Lambertian receiver and emitter, radius
+ * 1e-8 down to 1e-150 at distance 3.  Closed form: the cap (solid angle
+ * Omega = 2 pi t, t = s^2 / (1 + sqrt(1 - s^2)), s = sin a) times the receiver's F
+ * truncated at lmax 30 in the cap's direction, (kd/pi) sum_l zh_l K_l P_l(cos theta)
+ * (zh_l = zh_power, exact quadrature), up to O(l^2 a^2) < 1e-14 for a < 4e-9,
+ * times the emission from the public pieces (Eq. 20-21).  Budget: the tables'
+ * 3e-15 per coefficient (brdf_table_diffuse_exact) over 31 bands,
+ * 3e-15 sum_l K_l ~ 1.5e-13 of the truncated F (0.21 here): 1e-12 relative. */
+SHL_TEST(hvl_shade_small_hvl)
+{
+    const shl_brdf emit = {SHL_BRDF_PHONG, 1.0, 0.0, 0, 0, 1.0}, recv = {SHL_BRDF_PHONG, 0.8, 0.0, 0, 0, 1.0};
+    shl_brdf_table *te, *tr;
+    CHECK(shl_brdf_table_create(4, &emit, 90, &te) == SHL_OK);
+    CHECK(shl_brdf_table_create(L, &recv, 90, &tr) == SHL_OK);
+    const double x[3] = {0, 0, 0}, n[3] = {0, 0, 1}, wo[3] = {0.3, 0, 1}, th = 0.6, d = 3.0;
+    static const double radii[] = {1e-8, 3.6e-16, 3e-15, 1e-100, 1e-150};
+    double worst = 0.0, fr[9], fp[25], dl[3], e, ftrunc = 0.0;
+    for (int l = 0; l <= L; ++l) ftrunc += 0.8 / M_PI * zh_power(l, 1) * band_k(l) * legendre_p(l, cos(th));
+    const double mu[3] = {-sin(th), 0.0, -cos(th)};
+    shl_hvl h = {{d * sin(th), 0.0, d * cos(th)}, {0.0, 0.0, -1.0}, {0.0, 0.0, -1.0}, 1.0, 2.0, te};
+    CHECK(shl_brdf_table_lookup(te, h.normal, h.to_light, fr, NULL, fp) == SHL_OK);
+    mat_vec3(fr, mu, dl);
+    CHECK(shl_sh_eval(4, fp, dl, &e) == SHL_OK);
+    for (size_t i = 0; i < sizeof radii / sizeof *radii; ++i) {
+        const double rad = radii[i], s = rad / d, omega = 2.0 * M_PI * s * s / (1.0 + sqrt(1.0 - s * s));
+        h.radius = rad;
+        double got;
+        CHECK(shl_hvl_shade(&h, 1, x, n, wo, tr, &got) == SHL_OK);
+        const double want = 2.0 * e * cos(th) / (M_PI * rad * rad) * omega * ftrunc;
+        worst = fmax(worst, fabs(got / want - 1.0));
+    }
+    CHECK(worst < 1e-12);
+    harness_note("radius 1e-8..1e-150: max |radiance / closed form - 1| %.1e", worst);
+    shl_brdf_table_destroy(te);
+    shl_brdf_table_destroy(tr);
 }
 
 /* One HVL's term of Eq. (19) assembled from public pieces, with an SH rotation
