@@ -349,11 +349,65 @@ def sh_targets():
         write("fuzz_sh", name, data)
 
 
+def hvl_targets():
+    def raw(a, c, c2=None, up=0, null=False):
+        b = u8(1 if null else 0) + u8(0) + real(a) + real(c) + u8(up)
+        return b + (real(c2 if c2 is not None else 0.0) if up == 0 else b"")
+
+    def structured(mode, k, m, ulps=0, f=None, up=1, zero_a=False):
+        """a = (0.5 + m / 43690) 2^-k (capped at pi/2); mode 1: c = sin(f / 4096 a),
+        2: c = sin(a) (+4: -sin(a)) moved by ulps, 3: c = 1 (+4: 0, +8: -1) moved by ulps."""
+        b = u8(0) + u8(mode) + u16(k) + u16(m) + u8(0 if zero_a else 1) + u8(ulps & 0xFF)
+        return b + (i16(f) if mode % 4 == 1 else b"") + u8(up)
+
+    cases = {
+        # issue 20's table
+        "issue20-up-1.2e-16": raw(1.2e-16, 1.0),
+        "issue20-up-1e-15": raw(1e-15, 1.0),
+        "issue20-above-1e-16": raw(1e-16, 0.5),
+        "issue20-up-1e-300": raw(1e-300, 1.0),
+        "issue20-horizon-1e-9": raw(1e-9, 0.0, up=1),
+        "issue20-half-band-1e-6": raw(1e-6, 5e-7, up=3),
+        "half-pi-up": raw(0.5 * math.pi, 1.0),
+        "half-pi-down": raw(0.5 * math.pi, -1.0, up=1),
+        "denormal-cap": raw(5e-324, 5e-324, c2=-5e-324),
+        "denormal-cap-horizon": raw(1e-323, 5e-324, c2=0.0),
+        "point-horizon": raw(0.0, 0.0, c2=-0.0),
+        "point-tiny-above": raw(0.0, 5e-324, c2=-5e-324),
+        "nan": raw(0.3, NAN),
+        "inf-a": raw(INF, 0.5),
+        "c-above-1": raw(0.3, 1.0000000000000002),
+        "a-negative-denormal": raw(-5e-324, 0.5),
+        "a-above-half-pi": raw(1.5707963267948968, 0.5),
+        "null": raw(0.3, 0.5, null=True),
+        # edges, 1..4 ulps either side, for caps from pi/2 to 2^-1000
+        "edge-up-a1": structured(2, 0, 21845, ulps=1),
+        "edge-up-inside-a1": structured(2, 0, 21845, ulps=-1),
+        "edge-down-a1": structured(2 | 4, 0, 21845, ulps=-1),
+        "edge-down-inside-a1": structured(2 | 4, 0, 21845, ulps=1),
+        "edge-down-inside-2^-1000": structured(2 | 4, 1000, 21845, ulps=2),
+        "edge-up-2^-60": structured(2, 60, 1234, ulps=-4),
+        "edge-a-half-pi": structured(2, 0, 65535, ulps=-2),
+        # the middle of the band, where a plain smoothstep is not monotone
+        "middle-minus-0.1": structured(1, 0, 21845, f=-410, up=1),
+        # a pair 1 ulp apart where w^2 (3 - 2w) in plain doubles steps down (test_hvl.c's sweep)
+        "plain-smoothstep-steps-down": raw(0.5 * math.pi, math.nextafter(float.fromhex("-0x1.4060b67a858bfp-3"), -2.0), up=1),
+        "middle-plus-0.02": structured(1, 1, 30000, f=82, up=7),
+        "middle-tiny-cap": structured(1, 900, 100, f=-2048, up=1),
+        "near-1-wide-cap": structured(3, 0, 65535, ulps=-100, up=50),
+        "near-0": structured(3 | 4, 3, 5000, ulps=-3, up=6),
+        "structured-point": structured(3 | 4, 0, 0, ulps=1, zero_a=True),
+    }
+    for name, data in cases.items():
+        write("fuzz_hvl", name, data)
+
+
 if __name__ == "__main__":
     polygon_targets()
     sphere_targets()
     lights_targets()
     grid_targets()
     sh_targets()
+    hvl_targets()
     for t in sorted(os.listdir(ROOT)):
         print("%-16s %3d seeds" % (t, len([f for f in os.listdir(os.path.join(ROOT, t)) if f.startswith("seed-")])))
