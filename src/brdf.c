@@ -40,8 +40,13 @@ static double brdf_value(const shl_brdf *b, const double wi[3], const double wo[
     double f = b->kd / M_PI;
     if (b->ks == 0.0) return f;
     if (b->model == SHL_BRDF_PHONG) {
-        const double cr = wi[2] * wo[2] - wi[0] * wo[0] - wi[1] * wo[1]; /* r . wi, r = (-wo_x, -wo_y, wo_z) */
-        if (cr > 0.0) f += b->ks * (b->exponent + 2.0) / (2.0 * M_PI) * pow(cr, b->exponent);
+        /* (r . wi)^n, r = (-wo_x, -wo_y, wo_z), as (1 - d)^n with d = 1 - r . wi = |r - wi|^2 / 2:
+         * r . wi near 1 carries its rounding (~1e-16 absolute) into the lobe as n 1e-16
+         * relative (1e-10 at n = 1e6); the chord's square has no cancellation, and the
+         * inputs' length errors change it only in second order */
+        const double e[3] = {-wo[0] - wi[0], -wo[1] - wi[1], wo[2] - wi[2]};
+        const double d = 0.5 * shl__dot3(e, e);
+        if (d < 1.0) f += b->ks * (b->exponent + 2.0) / (2.0 * M_PI) * exp(b->exponent * log1p(-d));
         return f;
     }
     const double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
@@ -106,8 +111,9 @@ static void azimuthal_moments(projector *pj, double th)
     for (int p = 0; p < np; ++p)
         for (int q = 0; q < NP; ++q) {
             const double h = brk[p + 1] - brk[p];
-            const double phi = M_PI - (brk[p] + 0.5 * h * (pj->px[q] + 1.0)), cp = cos(phi);
-            const double wi[3] = {st * cp, st * sin(phi), ct};
+            /* phi = pi - psi: cos, sin of phi from psi (pi - psi would round psi near the lobe) */
+            const double psi = brk[p] + 0.5 * h * (pj->px[q] + 1.0), cp = -cos(psi);
+            const double wi[3] = {st * cp, st * sin(psi), ct};
             const double fv = 0.5 * h * pj->pw[q] * brdf_value(pj->b, wi, pj->wo);
             double c_prev = 1.0, c_m = cp; /* cos(m phi) by the Chebyshev recurrence */
             pj->c[0] += fv;
