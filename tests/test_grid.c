@@ -582,9 +582,10 @@ SHL_TEST(grid_bad_input)
     shl_ctx_destroy(ctx);
 }
 
-/* Every allocation (create: 2, fill: 1) fails in turn; every thread creation of
- * a 4-thread fill and interpolation fails in turn: SHL_ENOMEM / SHL_ETHREAD,
- * outputs untouched, nothing leaked (ASan), the grid still usable. */
+/* Every allocation (create: 2, fill: 2, the lights' box flags and the workspace)
+ * fails in turn; every thread creation of a 4-thread fill and interpolation fails
+ * in turn: SHL_ENOMEM / SHL_ETHREAD, outputs untouched (nodes and box flags),
+ * nothing leaked (ASan), the grid still usable. */
 SHL_TEST(grid_alloc_and_thread_failures)
 {
     shl_ctx *ctx;
@@ -611,11 +612,13 @@ SHL_TEST(grid_alloc_and_thread_failures)
         ++nomem;
         if (g) {
             double v[N2];
+            int nin = -1;
             CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0); /* fill wrote nothing */
+            CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nin) == SHL_OK && nin == 0);
             shl_grid_destroy(g);
         }
     }
-    CHECK(nomem == 3);
+    CHECK(nomem == 4);
 
     shl_grid *g = NULL;
     CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
@@ -627,9 +630,13 @@ SHL_TEST(grid_alloc_and_thread_failures)
         CHECK(st == SHL_ETHREAD);
         ethread += st == SHL_ETHREAD;
         double v[N2];
+        int nin = -1;
         CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0);
+        CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nin) == SHL_OK && nin == 0);
     }
     CHECK(shl_grid_fill(g, l, 4) == SHL_OK);
+    int nnear = -1; /* the quad at z = 1.5 is 0.5 above the box, within one spacing (h = 1) */
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nnear) == SHL_OK && nnear == 1);
     enum { NP = 2000 };
     static double pts[3 * NP], o[NP * N2 + 1], want[NP * N2];
     for (int i = 0; i < 3 * NP; ++i) pts[i] = -1.0 + 2.0 * i / (3 * NP);
@@ -732,5 +739,122 @@ SHL_TEST(grid_taylor_sliver_cell)
     harness_note("sliver cell 2^-1000 x 2^100 x 2^100: corners exact (max err %.1e), x-edge midpoints %.1e of scale",
                  max_corner, max_edge);
     shl_grid_destroy(g);
+    shl_ctx_destroy(ctx);
+}
+
+/* ---- lights meeting the box, clamped points (issue 13, item 6) ---- */
+
+/* The lights of the last fill meeting the box (which = SHL_GRID_IN_BOX / _NEAR_BOX) as a bit mask. */
+static unsigned box_mask(const shl_grid *g, int which)
+{
+    int idx[32], n = -1;
+    CHECK(shl_grid_lights_in_box(g, which, 32, idx, &n) == SHL_OK && n >= 0 && n <= 32);
+    unsigned m = 0;
+    for (int i = 0; i < n; ++i) {
+        CHECK(idx[i] >= 0 && idx[i] < 32 && (i == 0 || idx[i] > idx[i - 1]));
+        m |= 1u << idx[i];
+    }
+    return m;
+}
+
+/* Spheres around the box [0,1]^3 (spacing h = 0.5): expected flags from the closed-form
+ * distance centre-box, d = |c - clamp(c)|, against r (in box) and from the grown box
+ * [-0.5, 1.5]^3 (near).  Distances and radii are chosen so that d^2 and r^2 are exact
+ * or differ by far more than rounding. */
+SHL_TEST(grid_lights_in_box_spheres)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, white[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    int n = -1;
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, NULL, &n) == SHL_OK && n == 0); /* before any fill */
+    static const struct { double c[3], r; int in, near; } S[] = {
+        {{0.5, 0.5, 0.5}, 0.1, 1, 1},      /* inside */
+        {{0.5, 0.5, 2.0}, 1.0, 1, 1},      /* touches the face z = 1: d = r = 1 */
+        {{0.5, 0.5, 2.0}, 0.999, 0, 1},    /* d = 1 > r; grown box: d = 0.5 */
+        {{2.0, 2.0, 2.0}, 1.7, 0, 1},      /* d = sqrt 3 = 1.732 > r, its bounding box overlaps; grown: d = 0.866 */
+        {{2.0, 2.0, 2.0}, 1.75, 1, 1},     /* d = sqrt 3 < r */
+        {{10.0, 10.0, 10.0}, 1.0, 0, 0},   /* far */
+        {{0.5, 0.5, 0.5}, 100.0, 1, 1},    /* the box inside the ball */
+        {{0.5, -1.0, 0.5}, 0.5, 0, 1},     /* d = 1; grown: d = 0.5 = r (touching) */
+        {{0.5, -1.0, 0.5}, 0.499, 0, 0},   /* grown: d = 0.5 > r */
+    };
+    enum { NS = sizeof S / sizeof S[0] };
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    unsigned want_in = 0, want_near = 0;
+    for (int i = 0; i < NS; ++i) {
+        CHECK(shl_lights_add_sphere(l, S[i].c, S[i].r, white) == SHL_OK);
+        want_in |= (unsigned)S[i].in << i;
+        want_near |= (unsigned)S[i].near << i;
+    }
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    const unsigned in = box_mask(g, SHL_GRID_IN_BOX), near = box_mask(g, SHL_GRID_NEAR_BOX);
+    CHECK(in == want_in);
+    CHECK(near == want_near);
+    harness_note("%d spheres: in-box mask %#x (want %#x), near-box mask %#x (want %#x)", NS, in, want_in, near, want_near);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Polygons around the box [0,1]^3 (h = 0.5, grown box [-0.5, 1.5]^3), flags worked out by hand. */
+SHL_TEST(grid_lights_in_box_polygons)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, white[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3};
+    static const struct { int n; double v[8][3]; int in, near; } P[] = {
+        /* a small triangle inside */
+        {3, {{0.2, 0.2, 0.5}, {0.8, 0.2, 0.5}, {0.5, 0.8, 0.6}}, 1, 1},
+        /* crosses the face z = 1 (plane x = 0.5) */
+        {4, {{0.5, 0.2, 0.5}, {0.5, 0.8, 0.5}, {0.5, 0.8, 1.5}, {0.5, 0.2, 1.5}}, 1, 1},
+        /* plane x + y + z = 3.2 beyond the corner (1,1,1); its bounding box [0, 3.2]^3 holds the box;
+         * distance to the corner 0.2 / sqrt 3 < h */
+        {3, {{3.2, 0, 0}, {0, 3.2, 0}, {0, 0, 3.2}}, 0, 1},
+        /* plane x + y + z = 3 touches the corner (1,1,1), which is inside the triangle */
+        {3, {{3, 0, 0}, {0, 3, 0}, {0, 0, 3}}, 1, 1},
+        /* concave U at z = 0.5 whose notch (-0.2 < x < 1.2, y > -0.2) holds the box's section: the
+         * polygon misses the box by 0.2 (its convex hull and bounding box contain it) */
+        {8, {{-1, -1, 0.5}, {2, -1, 0.5}, {2, 3, 0.5}, {1.2, 3, 0.5}, {1.2, -0.2, 0.5}, {-0.2, -0.2, 0.5},
+             {-0.2, 3, 0.5}, {-1, 3, 0.5}}, 0, 1},
+        /* a quad at z = 0.5 larger than the box: no edge meets it, the section lies inside */
+        {4, {{-5, -5, 0.5}, {5, -5, 0.5}, {5, 5, 0.5}, {-5, 5, 0.5}}, 1, 1},
+        /* the same in the plane of the face z = 1 (touching), and just above it */
+        {4, {{-5, -5, 1}, {5, -5, 1}, {5, 5, 1}, {-5, 5, 1}}, 1, 1},
+        {4, {{-5, -5, 1.25}, {5, -5, 1.25}, {5, 5, 1.25}, {-5, 5, 1.25}}, 0, 1},
+        /* in the plane z = 0.5 beside the box: x in [2, 3], 0.5 beyond the grown box */
+        {3, {{2, 0.2, 0.5}, {3, 0.2, 0.5}, {2.5, 0.8, 0.5}}, 0, 0},
+        /* a vertex on the face x = 1, the rest outside */
+        {3, {{1, 0.5, 0.5}, {2, 0.2, 0.5}, {2, 0.8, 0.5}}, 1, 1},
+        /* an edge through the box's edge x = 1, z = 1 at y = 0.5 (the vertices outside) */
+        {3, {{0.5, 0.5, 1.5}, {1.5, 0.5, 0.5}, {3, 0.5, 3}}, 1, 1},
+        /* collinear vertices: a segment crossing the box */
+        {3, {{-1, 0.5, 0.5}, {0.5, 0.5, 0.5}, {2, 0.5, 0.5}}, 1, 1},
+        /* its plane x + y + z = 1.5 crosses the box, the triangle lies far away in it */
+        {3, {{10, -4, -4.5}, {11, -4, -5.5}, {10, -3, -5.5}}, 0, 0},
+        /* one-sided quad facing away: geometry alone counts (the crossing quad above, reversed) */
+        {4, {{0.5, 0.2, 1.5}, {0.5, 0.8, 1.5}, {0.5, 0.8, 0.5}, {0.5, 0.2, 0.5}}, 1, 1},
+    };
+    enum { NP = sizeof P / sizeof P[0] };
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    unsigned want_in = 0, want_near = 0;
+    for (int i = 0; i < NP; ++i) {
+        CHECK(shl_lights_add_polygon(l, &P[i].v[0][0], P[i].n, white, i == NP - 1 ? 0 : 1) == SHL_OK);
+        want_in |= (unsigned)P[i].in << i;
+        want_near |= (unsigned)P[i].near << i;
+    }
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    CHECK(shl_grid_fill(g, l, 1) == SHL_OK);
+    const unsigned in = box_mask(g, SHL_GRID_IN_BOX), near = box_mask(g, SHL_GRID_NEAR_BOX);
+    CHECK(in == want_in);
+    CHECK(near == want_near);
+    harness_note("%d polygons: in-box mask %#x (want %#x), near-box mask %#x (want %#x)", NP, in, want_in, near, want_near);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
