@@ -195,17 +195,18 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
  * Lights of the last successful shl_grid_fill (indices in its light set, in the
  * order added) whose geometry meets the closed box [lo, hi] (which =
  * SHL_GRID_IN_BOX), or the box [lo - h, hi + h], h[a] = (hi[a] - lo[a]) / (res[a] - 1)
- * (SHL_GRID_NEAR_BOX).  *count = their number (0 before the first fill); the first
- * min(*count, cap) indices, ascending, go to index[] (NULL allowed when cap = 0).
+ * (SHL_GRID_NEAR_BOX).  *count = their number (0 before the first fill; lights
+ * added to the set later count from the next fill); the first min(*count, cap)
+ * indices, ascending, go to index[] (NULL allowed when cap = 0).
  * Geometry: a polygon is its planar region (edges included, any rgb, one- or
  * two-sided alike), tested exactly -- an edge crossing the box, or the box's
  * section by the polygon's plane inside the polygon (concave polygons too; a
  * polygon whose bounding box overlaps the box but which misses it does not count);
  * collinear vertices: the segments.  A sphere is its solid ball: it meets the box
  * iff the distance from its centre to the box is <= radius (a box inside the ball
- * counts).  Touching counts.  Decided in floating point: exact for contacts at a
- * vertex, on a face's plane or on a sphere's surface at a representable point, else
- * to rounding of the intersection parameters.
+ * counts).  Touching counts.  Decided in floating point: a vertex on the box and a
+ * polygon in a face's plane count exactly; other contacts (an edge grazing the box,
+ * a sphere tangent to it, a plane through a corner) are decided to rounding.
  * Why it matters: the grid samples a field that is smooth only away from the
  * lights; a light in the box (a sphere's surface, a polygon's plane and edges)
  * puts kinks and discontinuities inside cells, and every interpolant is wrong near
@@ -213,8 +214,10 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
  * its surface off by up to 56-69% of its in-ball value sqrt(4 pi), all three
  * methods).  A light within one spacing of the box is in no cell, but the field's
  * derivatives (and the node gradients Taylor and Hermite carry) grow like inverse
- * powers of the distance to it: errors there are well above those of distant lights.
- * Evaluate points near such lights directly (shl_lights_eval_batch).
+ * powers of the distance to it (the same sphere half a spacing outside the box: up
+ * to 8% Hermite, 26% Taylor, 33% trilinear of max |L00| nearby; tests/test_grid.c,
+ * grid_sphere_in_box_reported).  Evaluate points near such lights directly
+ * (shl_lights_eval_batch).
  * cap < 0 or another which: SHL_EDOMAIN.  Reads only (thread-safe with interp).
  */
 int shl_grid_lights_in_box(const shl_grid *grid, int which, int cap, int *index, int *count);
@@ -226,7 +229,8 @@ int shl_grid_lights_in_box(const shl_grid *grid, int which, int cap, int *index,
  * Interpolate the grid's RGB coefficients at npts >= 0 points pts[3*p .. 3*p+2]
  * into rgb + 3*nc*p (layout rgb[c*nc + k]), with the cell's 8 corner nodes.
  * Points outside the box are clamped to it (each coordinate to [lo[a], hi[a]]):
- * they get the value at the nearest point of the box, never an extrapolation.
+ * they get the value at the nearest point of the box, never an extrapolation
+ * (shl_grid_interp_clamped counts them).
  * taylor_b: the exponent b of SHL_INTERP_TAYLOR (finite, > 0; ignored otherwise).
  * 1 <= nthreads <= SHL_MAX_THREADS as for shl_grid_fill; results do not depend on it.
  * Exactness: trilinear reproduces trilinear fields; Taylor reproduces linear fields

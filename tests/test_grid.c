@@ -1037,9 +1037,10 @@ SHL_TEST(grid_lights_in_box_refill_and_bad_input)
     shl_ctx_destroy(ctx);
 }
 
-/* What the flag warns of: a sphere light inside an 8^3 box.  Reference: direct
- * evaluation (shl_lights_eval_batch; inside the ball exactly sqrt(4 pi) in L00).  The
- * errors are recorded (not bounded: the interpolants are not meant to resolve a kink in a cell). */
+/* What the flags warn of: a sphere light inside an 8^3 box, then half a spacing
+ * outside it.  Reference: direct evaluation (shl_lights_eval_batch; inside the ball
+ * sqrt(4 pi) in L00).  The errors are recorded, not bounded: the interpolants are not
+ * meant to resolve a kink in a cell or a field varying on the scale of a cell. */
 SHL_TEST(grid_sphere_in_box_reported)
 {
     shl_ctx *ctx;
@@ -1076,10 +1077,34 @@ SHL_TEST(grid_sphere_in_box_reported)
         CHECK(shl_grid_interp(g, m, 2.0, NP, pts, outs, 2) == SHL_OK);
         for (int p = 0; p < NP; ++p) err[m] = fmax(err[m], fabs(outs[p * NV] - refs[p * NV]) / sqrt(4.0 * M_PI));
     }
+    /* the same sphere moved to 0.15 (half a spacing) outside the face x = 1: near, not in */
+    shl_lights *l2;
+    const double c2[3] = {1.45, -0.1, 0.0};
+    CHECK(shl_lights_create(&l2) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l2, c2, 0.3, white) == SHL_OK);
+    CHECK(shl_grid_fill(g, l2, 2) == SHL_OK);
+    int n_in = -1, n_near = -1;
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, NULL, &n_in) == SHL_OK && n_in == 0);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &n_near) == SHL_OK && n_near == 1);
+    for (int p = 0; p < NP; ++p) { /* points of the box within 0.6 of the face x = 1 */
+        pts[3 * p] = rng_range(&r, 0.4, 1.0);
+        pts[3 * p + 1] = rng_range(&r, -1.0, 1.0);
+        pts[3 * p + 2] = rng_range(&r, -1.0, 1.0);
+    }
+    CHECK(shl_lights_eval_batch(ctx, l2, NP, pts, refs, NULL) == SHL_OK);
+    double err2[3] = {0, 0, 0}, scale2 = 0.0;
+    for (int p = 0; p < NP; ++p) scale2 = fmax(scale2, fabs(refs[p * NV]));
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 2.0, NP, pts, outs, 2) == SHL_OK);
+        for (int i = 0; i < NP * NV; ++i) err2[m] = fmax(err2[m], fabs(outs[i] - refs[i]) / scale2);
+    }
     harness_note("sphere r 0.3 in an 8^3 box (h 0.29): L00 at its centre off by %.0f%%/%.0f%%/%.0f%% (trilinear/Taylor/Hermite); "
-                 "within 0.3 of its surface max L00 error %.0f%%/%.0f%%/%.0f%% of sqrt(4 pi)",
-                 100 * err_c[0], 100 * err_c[1], 100 * err_c[2], 100 * err[0], 100 * err[1], 100 * err[2]);
+                 "within 0.3 of its surface max L00 error %.0f%%/%.0f%%/%.0f%% of sqrt(4 pi); moved 0.15 outside the box "
+                 "(near): max error %.0f%%/%.0f%%/%.0f%% of max |L00|",
+                 100 * err_c[0], 100 * err_c[1], 100 * err_c[2], 100 * err[0], 100 * err[1], 100 * err[2], 100 * err2[0],
+                 100 * err2[1], 100 * err2[2]);
     shl_grid_destroy(g);
+    shl_lights_destroy(l2);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
