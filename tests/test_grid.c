@@ -995,8 +995,9 @@ SHL_TEST(grid_lights_in_box_refill_and_bad_input)
     const double in1[3] = {0.5, 0.5, 0.5}, in2[3] = {0.9, 0.1, 0.2}, far[3] = {9, 9, 9};
     const int res[3] = {2, 2, 2};
     shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
-    shl_lights *a, *b;
-    CHECK(shl_lights_create(&a) == SHL_OK && shl_lights_create(&b) == SHL_OK);
+    shl_lights *a = NULL, *b = NULL;
+    CHECK(shl_lights_create(&a) == SHL_OK);
+    CHECK(shl_lights_create(&b) == SHL_OK);
     CHECK(shl_lights_add_sphere(a, far, 0.5, white) == SHL_OK);   /* 0: out */
     CHECK(shl_lights_add_sphere(a, in1, 0.1, white) == SHL_OK);   /* 1: in */
     CHECK(shl_lights_add_polygon(a, quad_light, 4, white, 1) == SHL_OK); /* 2: z = 1.5, near (h = 1) */
