@@ -184,9 +184,43 @@ int shl_grid_set_node(shl_grid *grid, const int idx[3], const double *rgb, const
  * Set every node to shl_lights_eval of the light set at its position (Wu 2020
  * Alg. 1 lines 2-8), on 1 <= nthreads <= SHL_MAX_THREADS threads (1: the calling
  * thread only, no thread is created); the result does not depend on nthreads.
+ * It also records which lights meet the box (shl_grid_lights_in_box).
  * SHL_ETHREAD if a thread cannot be created (the grid is then unchanged).
  */
 int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
+
+#define SHL_GRID_IN_BOX   0  /* lights whose geometry meets the closed box [lo, hi] */
+#define SHL_GRID_NEAR_BOX 1  /* ... meets the box grown by one node spacing h[a] on every side (includes IN_BOX) */
+/**
+ * Lights of the last successful shl_grid_fill (indices in its light set, in the
+ * order added) whose geometry meets the closed box [lo, hi] (which =
+ * SHL_GRID_IN_BOX), or the box [lo - h, hi + h], h[a] = (hi[a] - lo[a]) / (res[a] - 1)
+ * (SHL_GRID_NEAR_BOX).  *count = their number (0 before the first fill; lights
+ * added to the set later count from the next fill); the first min(*count, cap)
+ * indices, ascending, go to index[] (NULL allowed when cap = 0).
+ * Geometry: a polygon is its planar region (edges included, any rgb, one- or
+ * two-sided alike), tested exactly -- an edge crossing the box, or the box's
+ * section by the polygon's plane inside the polygon (concave polygons too; a
+ * polygon whose bounding box overlaps the box but which misses it does not count);
+ * collinear vertices: the segments.  A sphere is its solid ball: it meets the box
+ * iff the distance from its centre to the box is <= radius (a box inside the ball
+ * counts).  Touching counts.  Decided in floating point: a vertex on the box and a
+ * polygon in a face's plane count exactly; other contacts (an edge grazing the box,
+ * a sphere tangent to it, a plane through a corner) are decided to rounding.
+ * Why it matters: the grid samples a field that is smooth only away from the
+ * lights; a light in the box (a sphere's surface, a polygon's plane and edges)
+ * puts kinks and discontinuities inside cells, and every interpolant is wrong near
+ * it (measured: a sphere of radius 0.3 in an 8^3 box of side 2, L00 within 0.3 of
+ * its surface off by up to 56-69% of its in-ball value sqrt(4 pi), all three
+ * methods).  A light within one spacing of the box is in no cell, but the field's
+ * derivatives (and the node gradients Taylor and Hermite carry) grow like inverse
+ * powers of the distance to it (the same sphere half a spacing outside the box: up
+ * to 8% Hermite, 26% Taylor, 33% trilinear of max |L00| nearby; tests/test_grid.c,
+ * grid_sphere_in_box_reported).  Evaluate points near such lights directly
+ * (shl_lights_eval_batch).
+ * cap < 0 or another which: SHL_EDOMAIN.  Reads only (thread-safe with interp).
+ */
+int shl_grid_lights_in_box(const shl_grid *grid, int which, int cap, int *index, int *count);
 
 #define SHL_INTERP_TRILINEAR 0  /* values only */
 #define SHL_INTERP_TAYLOR    1  /* Annen 2004 Eq. (15)-(16): first-order Taylor from the 8 corners, inverse-distance^b weights */
@@ -195,7 +229,8 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
  * Interpolate the grid's RGB coefficients at npts >= 0 points pts[3*p .. 3*p+2]
  * into rgb + 3*nc*p (layout rgb[c*nc + k]), with the cell's 8 corner nodes.
  * Points outside the box are clamped to it (each coordinate to [lo[a], hi[a]]):
- * they get the value at the nearest point of the box, never an extrapolation.
+ * they get the value at the nearest point of the box, never an extrapolation
+ * (shl_grid_interp_clamped counts them).
  * taylor_b: the exponent b of SHL_INTERP_TAYLOR (finite, > 0; ignored otherwise).
  * 1 <= nthreads <= SHL_MAX_THREADS as for shl_grid_fill; results do not depend on it.
  * Exactness: trilinear reproduces trilinear fields; Taylor reproduces linear fields
@@ -209,6 +244,15 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
  */
 int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
                     double *rgb, int nthreads);
+/**
+ * shl_grid_interp that also sets *nclamped (non-NULL, else SHL_ENULL) to the number
+ * of points that were clamped: those with some coordinate pts[3*p + a] < lo[a] or
+ * > hi[a] (a point on a face or edge of the box is inside: not clamped).  Same
+ * results as shl_grid_interp, bit for bit; the count does not depend on nthreads;
+ * nothing is written on error.
+ */
+int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
+                            double *rgb, int nthreads, int *nclamped);
 
 /* ---- spherical lights (Mezieres et al. 2022, "HVL", Sec. 4.2) ---------- */
 /**

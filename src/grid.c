@@ -3,6 +3,7 @@
 #include "grid.h"
 #include "lights.h"
 #include "parallel.h"
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -58,6 +59,7 @@ int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], 
 void shl_grid_destroy(shl_grid *grid)
 {
     if (!grid) return;
+    shl__free(grid->light_box);
     shl__free(grid->data);
     shl__free(grid);
 }
@@ -152,16 +154,184 @@ static void fill_range(void *arg, int worker, long begin, long end)
     }
 }
 
+/* ---- lights meeting the box (closed sets, decided in floating point) ---- */
+
+/* (a - b) / (c - d), the differences halved where one overflows (its operands then exceed 2^969: exact halves). */
+static double diff_ratio(double a, double b, double c, double d)
+{
+    double num = a - b, den = c - d;
+    if (isinf(num) || isinf(den)) {
+        num = 0.5 * a - 0.5 * b;
+        den = 0.5 * c - 0.5 * d;
+    }
+    return num / den;
+}
+
+/* Does the segment from a to b meet the closed box [lo, hi]?  Its parameter
+ * interval t in [0, 1] clipped by the three slabs lo <= a + t (b - a) <= hi. */
+static int segment_meets_box(const double *a, const double *b, const double lo[3], const double hi[3])
+{
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        if (a[k] == b[k]) {
+            if (a[k] < lo[k] || a[k] > hi[k]) return 0;
+            continue;
+        }
+        double ta = diff_ratio(lo[k], a[k], b[k], a[k]), tb = diff_ratio(hi[k], a[k], b[k], a[k]);
+        if (ta > tb) {
+            const double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+        if (t0 > t1) return 0;
+    }
+    return 1;
+}
+
+/* Is some point of the closed box in the (planar, simple) polygon v[0..n-1],
+ * given that no edge meets the box?  Then the box's section by the polygon's
+ * plane, convex and connected, meets no edge: it lies wholly inside or wholly
+ * outside the polygon, and one of its points q decides (crossing-number test in
+ * the plane of the two axes other than the normal's largest component). */
+static int section_in_polygon(const double nrm[3], const double *v, int n, const double lo[3], const double hi[3])
+{
+    const double m = fmax(fabs(nrm[0]), fmax(fabs(nrm[1]), fabs(nrm[2])));
+    if (!(m > 0.0)) return 0; /* collinear vertices: no area, the edges are all of it */
+    double c[8][3], f[8];
+    int e = INT_MIN;
+    for (int j = 0; j < 8; ++j)
+        for (int k = 0; k < 3; ++k) {
+            c[j][k] = (j >> k) & 1 ? hi[k] : lo[k];
+            const int ek = shl__ilogb_diff(c[j][k], v[k]);
+            e = ek > e ? ek : e;
+        }
+    if (e == INT_MIN) return 1; /* unreachable (lo < hi): every corner at v_0 */
+    int pos = 0, neg = 0, on = -1; /* corners in front of, behind, on the plane: signed distances in units 2^e m */
+    for (int j = 0; j < 8; ++j) {
+        f[j] = 0.0;
+        for (int k = 0; k < 3; ++k) f[j] += nrm[k] / m * shl__diff_scaled(c[j][k], v[k], -e);
+        pos += f[j] > 0.0;
+        neg += f[j] < 0.0;
+        on = f[j] == 0.0 ? j : on;
+    }
+    double q[3];
+    if (on >= 0)
+        memcpy(q, c[on], sizeof q);
+    else if (!pos || !neg)
+        return 0; /* the plane misses the box */
+    else { /* a box edge j -> j ^ 2^a whose ends lie on opposite sides (the cube's edges connect its corners) */
+        int j = 0, a = -1;
+        for (int jj = 0; jj < 8 && a < 0; ++jj)
+            for (int aa = 0; aa < 3 && a < 0; ++aa)
+                if (f[jj] < 0.0 && f[jj ^ (1 << aa)] > 0.0) {
+                    j = jj;
+                    a = aa;
+                }
+        const double t = f[j] / (f[j] - f[j ^ (1 << a)]); /* in (0, 1): no cancellation */
+        memcpy(q, c[j], sizeof q);
+        q[a] = fmin(fmax(c[j][a] * (1.0 - t) + c[j ^ (1 << a)][a] * t, lo[a]), hi[a]);
+    }
+    const int kd = fabs(nrm[0]) == m ? 0 : fabs(nrm[1]) == m ? 1 : 2, i0 = (kd + 1) % 3, i1 = (kd + 2) % 3;
+    int inside = 0;
+    for (int i = 0, j = n - 1; i < n; j = i++) {
+        const double *p = v + 3 * i, *r = v + 3 * j;
+        if ((p[i1] > q[i1]) != (r[i1] > q[i1])) {
+            const double s = diff_ratio(q[i1], p[i1], r[i1], p[i1]); /* in [0, 1] */
+            inside ^= q[i0] < p[i0] * (1.0 - s) + r[i0] * s;
+        }
+    }
+    return inside;
+}
+
+/* Does the ball |x - c| <= r meet the closed box?  Its distance to the box,
+ * sqrt(sum_k d_k^2), d_k = max(lo_k - c_k, 0, c_k - hi_k), against r, squares
+ * taken in units of 2^ilogb(max d_k) so that none over- or underflows. */
+static int ball_meets_box(const double c[3], double r, const double lo[3], const double hi[3])
+{
+    double d[3], dm = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        d[k] = c[k] < lo[k] ? lo[k] - c[k] : c[k] > hi[k] ? c[k] - hi[k] : 0.0; /* overflow: inf > r */
+        dm = d[k] > dm ? d[k] : dm;
+    }
+    if (dm > r) return 0;
+    if (dm == 0.0 || r >= 2.0 * dm) return 1; /* distance <= sqrt(3) dm */
+    const int e = shl__ilogb(dm);
+    double q = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double s = shl__ldexp(d[k], -e);
+        q += s * s;
+    }
+    const double rs = shl__ldexp(r, -e); /* in [1, 4) */
+    return q <= rs * rs;
+}
+
+static int light_meets_box(const shl_lights *lights, const shl__light *li, const double lo[3], const double hi[3])
+{
+    if (li->kind == SHL__LIGHT_SPHERE) return ball_meets_box(li->center, li->radius, lo, hi);
+    const double *v = lights->verts + li->vofs;
+    for (int i = 0, j = li->n - 1; i < li->n; j = i++)
+        if (segment_meets_box(v + 3 * j, v + 3 * i, lo, hi)) return 1;
+    return section_in_polygon(li->normal, v, li->n, lo, hi);
+}
+
+/* SHL__BOX_* bits of every light; the grown box is clipped to the doubles (all geometry lies inside). */
+static void classify_lights(const shl_grid *g, const shl_lights *lights, unsigned char *box)
+{
+    double glo[3], ghi[3];
+    for (int a = 0; a < 3; ++a) {
+        glo[a] = fmax(g->lo[a] - g->h[a], -DBL_MAX);
+        ghi[a] = fmin(g->hi[a] + g->h[a], DBL_MAX);
+    }
+    for (int i = 0; i < lights->count; ++i) {
+        const shl__light *li = &lights->items[i];
+        box[i] = light_meets_box(lights, li, g->lo, g->hi) ? SHL__BOX_IN | SHL__BOX_NEAR
+                 : light_meets_box(lights, li, glo, ghi) ? SHL__BOX_NEAR : 0;
+    }
+}
+
 int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads)
 {
     if (!grid || !lights) return SHL_ENULL;
     if (nthreads < 1 || nthreads > SHL_MAX_THREADS) return SHL_EDOMAIN;
+    unsigned char *box = NULL;
+    if (lights->count > 0) {
+        box = shl__malloc((size_t)lights->count);
+        if (!box) return SHL_ENOMEM;
+        classify_lights(grid, lights, box);
+    }
     const long n = (long)grid->nnodes, grain = 1;
     const int nw = shl__parallel_workers(n, grain, nthreads);
     fill_job job = {grid, lights, NULL, grid->node_len + shl__lights_ws_size(grid->lmax)};
     job.ws = shl__malloc(sizeof(double) * job.ws_len * (size_t)nw);
-    if (!job.ws) return SHL_ENOMEM;
+    if (!job.ws) {
+        shl__free(box);
+        return SHL_ENOMEM;
+    }
     const int st = shl__parallel_for(n, grain, nw, fill_range, &job);
     shl__free(job.ws);
-    return st;
+    if (st) {
+        shl__free(box);
+        return st;
+    }
+    shl__free(grid->light_box);
+    grid->light_box = box;
+    grid->nlights = lights->count;
+    return SHL_OK;
+}
+
+int shl_grid_lights_in_box(const shl_grid *grid, int which, int cap, int *index, int *count)
+{
+    if (!grid || !count || (cap > 0 && !index)) return SHL_ENULL;
+    if ((which != SHL_GRID_IN_BOX && which != SHL_GRID_NEAR_BOX) || cap < 0) return SHL_EDOMAIN;
+    const unsigned char bit = which == SHL_GRID_IN_BOX ? SHL__BOX_IN : SHL__BOX_NEAR;
+    int found = 0;
+    for (int i = 0; i < grid->nlights; ++i)
+        if (grid->light_box[i] & bit) {
+            if (found < cap) index[found] = i;
+            ++found;
+        }
+    *count = found;
+    return SHL_OK;
 }

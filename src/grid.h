@@ -14,7 +14,13 @@ struct shl_grid {
     size_t nnodes, node_len;
     const shl__isa *isa;     /* interpolation kernel: the creating context's (dispatch.c) */
     void *data;
+    int nlights;             /* lights of the last successful shl_grid_fill (0 before any) */
+    unsigned char *light_box; /* per light of that fill: SHL__BOX_* bits; NULL if nlights == 0 */
 };
+
+/* Bits of shl_grid.light_box: the light's geometry meets the closed box [lo, hi],
+ * resp. the box grown by one node spacing h on every side. */
+enum { SHL__BOX_IN = 1, SHL__BOX_NEAR = 2 };
 
 /* Position of node idx (the last node of an axis is exactly hi). */
 void shl__grid_node_pos(const shl_grid *g, const int idx[3], double pos[3]);

@@ -146,8 +146,11 @@ static void interp_range(void *arg, int worker, long begin, long end)
     }
 }
 
-int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
-                    double *rgb, int nthreads)
+/* Shared by both entry points: nclamped (if not NULL) receives the number of
+ * points with a coordinate outside [lo[a], hi[a]], counted while validating,
+ * in the calling thread (independent of nthreads), and written only on success. */
+static int grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts, double *rgb,
+                       int nthreads, int *nclamped)
 {
     if (!grid || !pts || !rgb) return SHL_ENULL;
     if (method != SHL_INTERP_TRILINEAR && method != SHL_INTERP_TAYLOR && method != SHL_INTERP_HERMITE)
@@ -157,8 +160,29 @@ int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts,
         if (!(taylor_b > 0.0)) return SHL_EDOMAIN;
     }
     if (npts < 0 || nthreads < 1 || nthreads > SHL_MAX_THREADS) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    int outside = 0;
+    for (int p = 0; p < npts; ++p) {
+        const double *x = pts + 3 * (size_t)p;
+        if (shl__check_finite(x, 3)) return SHL_ENONFINITE;
+        int out = 0;
+        for (int a = 0; a < 3; ++a) out |= x[a] < grid->lo[a] || x[a] > grid->hi[a];
+        outside += out;
+    }
     interp_job job = {grid, method, taylor_b, pts, rgb};
-    return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
+    const int st = shl__parallel_for(npts, 256, nthreads, interp_range, &job);
+    if (st == SHL_OK && nclamped) *nclamped = outside;
+    return st;
+}
+
+int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
+                    double *rgb, int nthreads)
+{
+    return grid_interp(grid, method, taylor_b, npts, pts, rgb, nthreads, NULL);
+}
+
+int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
+                            double *rgb, int nthreads, int *nclamped)
+{
+    if (!nclamped) return SHL_ENULL;
+    return grid_interp(grid, method, taylor_b, npts, pts, rgb, nthreads, nclamped);
 }

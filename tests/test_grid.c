@@ -582,9 +582,10 @@ SHL_TEST(grid_bad_input)
     shl_ctx_destroy(ctx);
 }
 
-/* Every allocation (create: 2, fill: 1) fails in turn; every thread creation of
- * a 4-thread fill and interpolation fails in turn: SHL_ENOMEM / SHL_ETHREAD,
- * outputs untouched, nothing leaked (ASan), the grid still usable. */
+/* Every allocation (create: 2, fill: 2, the lights' box flags and the workspace)
+ * fails in turn; every thread creation of a 4-thread fill and interpolation fails
+ * in turn: SHL_ENOMEM / SHL_ETHREAD, outputs untouched (nodes and box flags),
+ * nothing leaked (ASan), the grid still usable. */
 SHL_TEST(grid_alloc_and_thread_failures)
 {
     shl_ctx *ctx;
@@ -611,11 +612,13 @@ SHL_TEST(grid_alloc_and_thread_failures)
         ++nomem;
         if (g) {
             double v[N2];
+            int nin = -1;
             CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0); /* fill wrote nothing */
+            CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nin) == SHL_OK && nin == 0);
             shl_grid_destroy(g);
         }
     }
-    CHECK(nomem == 3);
+    CHECK(nomem == 4);
 
     shl_grid *g = NULL;
     CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
@@ -627,9 +630,13 @@ SHL_TEST(grid_alloc_and_thread_failures)
         CHECK(st == SHL_ETHREAD);
         ethread += st == SHL_ETHREAD;
         double v[N2];
+        int nin = -1;
         CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0);
+        CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nin) == SHL_OK && nin == 0);
     }
     CHECK(shl_grid_fill(g, l, 4) == SHL_OK);
+    int nnear = -1; /* the quad at z = 1.5 is 0.5 above the box, within one spacing (h = 1) */
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nnear) == SHL_OK && nnear == 1);
     enum { NP = 2000 };
     static double pts[3 * NP], o[NP * N2 + 1], want[NP * N2];
     for (int i = 0; i < 3 * NP; ++i) pts[i] = -1.0 + 2.0 * i / (3 * NP);
@@ -732,5 +739,453 @@ SHL_TEST(grid_taylor_sliver_cell)
     harness_note("sliver cell 2^-1000 x 2^100 x 2^100: corners exact (max err %.1e), x-edge midpoints %.1e of scale",
                  max_corner, max_edge);
     shl_grid_destroy(g);
+    shl_ctx_destroy(ctx);
+}
+
+/* ---- lights meeting the box, clamped points (issue 13, item 6) ---- */
+
+/* The lights of the last fill meeting the box (which = SHL_GRID_IN_BOX / _NEAR_BOX) as a bit mask. */
+static unsigned box_mask(const shl_grid *g, int which)
+{
+    int idx[32], n = -1;
+    CHECK(shl_grid_lights_in_box(g, which, 32, idx, &n) == SHL_OK && n >= 0 && n <= 32);
+    unsigned m = 0;
+    for (int i = 0; i < n; ++i) {
+        CHECK(idx[i] >= 0 && idx[i] < 32 && (i == 0 || idx[i] > idx[i - 1]));
+        m |= 1u << idx[i];
+    }
+    return m;
+}
+
+/* Spheres around the box [0,1]^3 (spacing h = 0.5): expected flags from the closed-form
+ * distance centre-box, d = |c - clamp(c)|, against r (in box) and from the grown box
+ * [-0.5, 1.5]^3 (near).  Distances and radii are chosen so that d^2 and r^2 are exact
+ * or differ by far more than rounding. */
+SHL_TEST(grid_lights_in_box_spheres)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, white[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    int n = -1;
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, NULL, &n) == SHL_OK && n == 0); /* before any fill */
+    static const struct { double c[3], r; int in, near; } S[] = {
+        {{0.5, 0.5, 0.5}, 0.1, 1, 1},      /* inside */
+        {{0.5, 0.5, 2.0}, 1.0, 1, 1},      /* touches the face z = 1: d = r = 1 */
+        {{0.5, 0.5, 2.0}, 0.999, 0, 1},    /* d = 1 > r; grown box: d = 0.5 */
+        {{2.0, 2.0, 2.0}, 1.7, 0, 1},      /* d = sqrt 3 = 1.732 > r, its bounding box overlaps; grown: d = 0.866 */
+        {{2.0, 2.0, 2.0}, 1.75, 1, 1},     /* d = sqrt 3 < r */
+        {{10.0, 10.0, 10.0}, 1.0, 0, 0},   /* far */
+        {{0.5, 0.5, 0.5}, 100.0, 1, 1},    /* the box inside the ball */
+        {{0.5, -1.0, 0.5}, 0.5, 0, 1},     /* d = 1; grown: d = 0.5 = r (touching) */
+        {{0.5, -1.0, 0.5}, 0.499, 0, 0},   /* grown: d = 0.5 > r */
+    };
+    enum { NS = sizeof S / sizeof S[0] };
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    unsigned want_in = 0, want_near = 0;
+    for (int i = 0; i < NS; ++i) {
+        CHECK(shl_lights_add_sphere(l, S[i].c, S[i].r, white) == SHL_OK);
+        want_in |= (unsigned)S[i].in << i;
+        want_near |= (unsigned)S[i].near << i;
+    }
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    const unsigned in = box_mask(g, SHL_GRID_IN_BOX), near = box_mask(g, SHL_GRID_NEAR_BOX);
+    CHECK(in == want_in);
+    CHECK(near == want_near);
+    harness_note("%d spheres: in-box mask %#x (want %#x), near-box mask %#x (want %#x)", NS, in, want_in, near, want_near);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Polygons around the box [0,1]^3 (h = 0.5, grown box [-0.5, 1.5]^3), flags worked out by hand. */
+SHL_TEST(grid_lights_in_box_polygons)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, white[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3};
+    static const struct { int n; double v[8][3]; int in, near; } P[] = {
+        /* a small triangle inside */
+        {3, {{0.2, 0.2, 0.5}, {0.8, 0.2, 0.5}, {0.5, 0.8, 0.6}}, 1, 1},
+        /* crosses the face z = 1 (plane x = 0.5) */
+        {4, {{0.5, 0.2, 0.5}, {0.5, 0.8, 0.5}, {0.5, 0.8, 1.5}, {0.5, 0.2, 1.5}}, 1, 1},
+        /* plane x + y + z = 3.2 beyond the corner (1,1,1); its bounding box [0, 3.2]^3 holds the box;
+         * distance to the corner 0.2 / sqrt 3 < h */
+        {3, {{3.2, 0, 0}, {0, 3.2, 0}, {0, 0, 3.2}}, 0, 1},
+        /* plane x + y + z = 3 touches the corner (1,1,1), which is inside the triangle */
+        {3, {{3, 0, 0}, {0, 3, 0}, {0, 0, 3}}, 1, 1},
+        /* concave U at z = 0.5 whose notch (-0.2 < x < 1.2, y > -0.2) holds the box's section: the
+         * polygon misses the box by 0.2 (its convex hull and bounding box contain it) */
+        {8, {{-1, -1, 0.5}, {2, -1, 0.5}, {2, 3, 0.5}, {1.2, 3, 0.5}, {1.2, -0.2, 0.5}, {-0.2, -0.2, 0.5},
+             {-0.2, 3, 0.5}, {-1, 3, 0.5}}, 0, 1},
+        /* a quad at z = 0.5 larger than the box: no edge meets it, the section lies inside */
+        {4, {{-5, -5, 0.5}, {5, -5, 0.5}, {5, 5, 0.5}, {-5, 5, 0.5}}, 1, 1},
+        /* the same in the plane of the face z = 1 (touching), and just above it */
+        {4, {{-5, -5, 1}, {5, -5, 1}, {5, 5, 1}, {-5, 5, 1}}, 1, 1},
+        {4, {{-5, -5, 1.25}, {5, -5, 1.25}, {5, 5, 1.25}, {-5, 5, 1.25}}, 0, 1},
+        /* in the plane z = 0.5 beside the box: x in [2, 3], 0.5 beyond the grown box */
+        {3, {{2, 0.2, 0.5}, {3, 0.2, 0.5}, {2.5, 0.8, 0.5}}, 0, 0},
+        /* a vertex on the face x = 1, the rest outside */
+        {3, {{1, 0.5, 0.5}, {2, 0.2, 0.5}, {2, 0.8, 0.5}}, 1, 1},
+        /* an edge through the box's edge x = 1, z = 1 at y = 0.5 (the vertices outside) */
+        {3, {{0.5, 0.5, 1.5}, {1.5, 0.5, 0.5}, {3, 0.5, 3}}, 1, 1},
+        /* collinear vertices: a segment crossing the box */
+        {3, {{-1, 0.5, 0.5}, {0.5, 0.5, 0.5}, {2, 0.5, 0.5}}, 1, 1},
+        /* its plane x + y + z = 1.5 crosses the box, the triangle lies far away in it */
+        {3, {{10, -4, -4.5}, {11, -4, -5.5}, {10, -3, -5.5}}, 0, 0},
+        /* one-sided quad facing away: geometry alone counts (the crossing quad above, reversed) */
+        {4, {{0.5, 0.2, 1.5}, {0.5, 0.8, 1.5}, {0.5, 0.8, 0.5}, {0.5, 0.2, 0.5}}, 1, 1},
+    };
+    enum { NP = sizeof P / sizeof P[0] };
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    unsigned want_in = 0, want_near = 0;
+    for (int i = 0; i < NP; ++i) {
+        CHECK(shl_lights_add_polygon(l, &P[i].v[0][0], P[i].n, white, i == NP - 1 ? 0 : 1) == SHL_OK);
+        want_in |= (unsigned)P[i].in << i;
+        want_near |= (unsigned)P[i].near << i;
+    }
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    CHECK(shl_grid_fill(g, l, 1) == SHL_OK);
+    const unsigned in = box_mask(g, SHL_GRID_IN_BOX), near = box_mask(g, SHL_GRID_NEAR_BOX);
+    CHECK(in == want_in);
+    CHECK(near == want_near);
+    harness_note("%d polygons: in-box mask %#x (want %#x), near-box mask %#x (want %#x)", NP, in, want_in, near, want_near);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Separating-axis gap between the triangle t and the box [lo, hi] (Akenine-Moller 2001):
+ * the largest, over the 13 axes (3 box normals, the triangle's normal, the 9 products
+ * box normal x edge), of the distance between the two projections, in long double.
+ * Two convex sets are disjoint iff some axis separates them, so > 0 iff disjoint. */
+static long double sat_gap(double t[3][3], const double lo[3], const double hi[3])
+{
+    long double v[3][3], e[3], f[3][3], axes[13][3], gap = -INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        const long double c = 0.5L * ((long double)lo[k] + hi[k]);
+        e[k] = 0.5L * ((long double)hi[k] - lo[k]);
+        for (int i = 0; i < 3; ++i) v[i][k] = t[i][k] - c;
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) f[i][k] = v[(i + 1) % 3][k] - v[i][k];
+    int na = 0;
+    for (int k = 0; k < 3; ++k, ++na)
+        for (int a = 0; a < 3; ++a) axes[na][a] = a == k;
+    axes[na][0] = f[0][1] * f[1][2] - f[0][2] * f[1][1];
+    axes[na][1] = f[0][2] * f[1][0] - f[0][0] * f[1][2];
+    axes[na][2] = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+    ++na;
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i, ++na) { /* u_k x f_i */
+            axes[na][k] = 0.0L;
+            axes[na][(k + 1) % 3] = -f[i][(k + 2) % 3];
+            axes[na][(k + 2) % 3] = f[i][(k + 1) % 3];
+        }
+    for (int j = 0; j < na; ++j) {
+        const long double *L = axes[j];
+        const long double len = sqrtl(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+        if (len < 1e-30L) continue; /* an edge parallel to a box normal */
+        long double mn = INFINITY, mx = -INFINITY, r = 0.0L;
+        for (int i = 0; i < 3; ++i) {
+            const long double p = L[0] * v[i][0] + L[1] * v[i][1] + L[2] * v[i][2];
+            mn = fminl(mn, p);
+            mx = fmaxl(mx, p);
+        }
+        for (int k = 0; k < 3; ++k) r += e[k] * fabsl(L[k]);
+        gap = fmaxl(gap, fmaxl(mn - r, -r - mx) / len);
+    }
+    return gap;
+}
+
+/* Random triangles, concave star polygons and spheres around a box: the flags against
+ * independent references -- the triangles' and the stars' fan triangles' separating-axis
+ * gaps (a star meets the box iff one of its fan triangles from its centre does), the
+ * spheres' closed-form distance -- for the box and the box grown by h.  Cases within 1e-9
+ * of touching are skipped (rounding decides them; the gaps are computed in long double). */
+SHL_TEST(grid_lights_in_box_random_vs_sat)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(0, &ctx) == SHL_OK);
+    const double lo[3] = {-0.5, 0.0, 0.25}, hi[3] = {1.0, 0.75, 2.0}, white[3] = {1, 1, 1};
+    const int res[3] = {3, 3, 3};
+    double glo[3], ghi[3];
+    for (int a = 0; a < 3; ++a) {
+        const double h = (hi[a] - lo[a]) / (res[a] - 1);
+        glo[a] = lo[a] - h;
+        ghi[a] = hi[a] + h;
+    }
+    enum { NL = 3000 };
+    static signed char want[2][NL]; /* [in, near][light]: 1, 0, or -1 (too close to call) */
+    shl_lights *l;
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    rng_t r = {77};
+    int skipped = 0;
+    for (int i = 0; i < NL; ++i) {
+        double c[3], nrm[3], v[3 * 9];
+        for (int a = 0; a < 3; ++a) c[a] = rng_range(&r, lo[a] - 1.0, hi[a] + 1.0);
+        const int kind = i % 3; /* triangle, star, sphere */
+        const double size = rng_range(&r, 0.05, 1.5);
+        long double gap[2] = {INFINITY, INFINITY};
+        if (kind == 2) {
+            CHECK(shl_lights_add_sphere(l, c, size, white) == SHL_OK);
+            for (int b = 0; b < 2; ++b) {
+                long double d2 = 0.0L;
+                for (int a = 0; a < 3; ++a) {
+                    const long double bl = b ? glo[a] : lo[a], bh = b ? ghi[a] : hi[a];
+                    const long double d = c[a] < bl ? bl - c[a] : c[a] > bh ? c[a] - bh : 0.0L;
+                    d2 += d * d;
+                }
+                gap[b] = sqrtl(d2) - size;
+            }
+        } else {
+            const int n = kind == 0 ? 3 : 5 + (int)(rng_uniform(&r) * 5);
+            rng_unit_vector(&r, nrm);
+            random_polygon(&r, n, kind == 1, c, nrm, size, v);
+            CHECK(shl_lights_add_polygon(l, v, n, white, 1) == SHL_OK);
+            for (int b = 0; b < 2; ++b)
+                for (int j = 0; j < (kind == 0 ? 1 : n); ++j) {
+                    double t[3][3];
+                    for (int a = 0; a < 3; ++a) {
+                        t[0][a] = kind == 0 ? v[a] : c[a];
+                        t[1][a] = kind == 0 ? v[3 + a] : v[3 * j + a];
+                        t[2][a] = kind == 0 ? v[6 + a] : v[3 * ((j + 1) % n) + a];
+                    }
+                    gap[b] = fminl(gap[b], sat_gap(t, b ? glo : lo, b ? ghi : hi));
+                }
+        }
+        for (int b = 0; b < 2; ++b) want[b][i] = fabsl(gap[b]) < 1e-9L ? -1 : gap[b] <= 0.0L;
+        skipped += want[0][i] < 0 || want[1][i] < 0;
+    }
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    static int idx[NL];
+    int bad = 0, count[2] = {0, 0};
+    for (int b = 0; b < 2; ++b) {
+        int n = -1;
+        CHECK(shl_grid_lights_in_box(g, b ? SHL_GRID_NEAR_BOX : SHL_GRID_IN_BOX, NL, idx, &n) == SHL_OK);
+        count[b] = n;
+        for (int i = 0, k = 0; i < NL; ++i) {
+            const int got = k < n && idx[k] == i;
+            k += got;
+            bad += want[b][i] >= 0 && got != want[b][i];
+        }
+    }
+    CHECK(bad == 0);
+    CHECK(count[0] > NL / 10 && count[1] > count[0] && count[1] < NL - NL / 10); /* both outcomes well represented */
+    harness_note("%d lights (1/3 each triangles, concave stars, spheres): %d in box, %d near; %d mismatches, %d too close to call",
+                 NL, count[0], count[1], bad, skipped);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* The flags follow the last successful fill: a refill with another set replaces them,
+ * a failed fill (bad nthreads) keeps them; a short index buffer gets the first cap
+ * indices, the rest untouched; bad arguments write nothing. */
+SHL_TEST(grid_lights_in_box_refill_and_bad_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(1, &ctx) == SHL_OK);
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, white[3] = {1, 1, 1};
+    const double in1[3] = {0.5, 0.5, 0.5}, in2[3] = {0.9, 0.1, 0.2}, far[3] = {9, 9, 9};
+    const int res[3] = {2, 2, 2};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    shl_lights *a = NULL, *b = NULL;
+    CHECK(shl_lights_create(&a) == SHL_OK);
+    CHECK(shl_lights_create(&b) == SHL_OK);
+    CHECK(shl_lights_add_sphere(a, far, 0.5, white) == SHL_OK);   /* 0: out */
+    CHECK(shl_lights_add_sphere(a, in1, 0.1, white) == SHL_OK);   /* 1: in */
+    CHECK(shl_lights_add_polygon(a, quad_light, 4, white, 1) == SHL_OK); /* 2: z = 1.5, near (h = 1) */
+    CHECK(shl_lights_add_sphere(a, in2, 0.05, white) == SHL_OK);  /* 3: in */
+    CHECK(shl_lights_add_sphere(b, far, 0.5, white) == SHL_OK);
+    int idx[4] = {-7, -7, -7, -7}, n = -1;
+    CHECK(shl_grid_fill(g, a, 1) == SHL_OK);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 4, idx, &n) == SHL_OK && n == 2 && idx[0] == 1 && idx[1] == 3 && idx[2] == -7);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 2, idx, &n) == SHL_OK && n == 3 && idx[0] == 1 && idx[1] == 2 && idx[2] == -7);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, idx, &n) == SHL_OK && n == 2 && idx[0] == 1); /* cap 0: count only */
+    const int n_in = n;
+    /* bad arguments: nothing written */
+    n = -1;
+    idx[0] = -7;
+    CHECK(shl_grid_lights_in_box(NULL, SHL_GRID_IN_BOX, 4, idx, &n) == SHL_ENULL);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 4, idx, NULL) == SHL_ENULL);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 1, NULL, &n) == SHL_ENULL);
+    CHECK(shl_grid_lights_in_box(g, 2, 4, idx, &n) == SHL_EDOMAIN);
+    CHECK(shl_grid_lights_in_box(g, -1, 4, idx, &n) == SHL_EDOMAIN);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, -1, idx, &n) == SHL_EDOMAIN);
+    CHECK(n == -1 && idx[0] == -7);
+    /* a failed fill keeps the flags; later additions to the set count only after a refill */
+    CHECK(shl_grid_fill(g, b, 0) == SHL_EDOMAIN);
+    CHECK(shl_lights_add_sphere(a, in1, 0.2, white) == SHL_OK);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, NULL, &n) == SHL_OK && n == n_in);
+    CHECK(shl_grid_fill(g, a, 2) == SHL_OK);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 4, idx, &n) == SHL_OK && n == 3 && idx[2] == 4);
+    CHECK(shl_grid_fill(g, b, 1) == SHL_OK);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 4, idx, &n) == SHL_OK && n == 0);
+    shl_lights_destroy(b); /* an empty set */
+    CHECK(shl_lights_create(&b) == SHL_OK);
+    CHECK(shl_grid_fill(g, a, 1) == SHL_OK && shl_grid_fill(g, b, 1) == SHL_OK);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 4, idx, &n) == SHL_OK && n == 0);
+    harness_note("first fill: %d lights in box, refills replace and failed fills keep the flags", n_in);
+    shl_grid_destroy(g);
+    shl_lights_destroy(a);
+    shl_lights_destroy(b);
+    shl_ctx_destroy(ctx);
+}
+
+/* What the flags warn of: a sphere light inside an 8^3 box, then half a spacing
+ * outside it.  Reference: direct evaluation (shl_lights_eval_batch; inside the ball
+ * sqrt(4 pi) in L00).  The errors are recorded, not bounded: the interpolants are not
+ * meant to resolve a kink in a cell or a field varying on the scale of a cell. */
+SHL_TEST(grid_sphere_in_box_reported)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l;
+    const double white[3] = {1, 1, 1}, c[3] = {0.05, -0.1, 0.0};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l, c, 0.3, white) == SHL_OK);
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    const int res[3] = {8, 8, 8};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+    int n = -1, i0 = -1;
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 1, &i0, &n) == SHL_OK && n == 1 && i0 == 0);
+    double ref[NV], out[NV], err_c[3];
+    CHECK(shl_lights_eval(ctx, l, c, ref, NULL) == SHL_OK);
+    CHECK_NEAR(ref[0], sqrt(4.0 * M_PI), 16 * DBL_EPSILON); /* the documented value inside the ball, to rounding */
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 2.0, 1, c, out, 1) == SHL_OK);
+        err_c[m] = fabs(out[0] - ref[0]) / ref[0];
+    }
+    enum { NP = 2000 }; /* random points within 0.3 of the sphere's surface */
+    static double pts[3 * NP], refs[NP * NV], outs[NP * NV];
+    rng_t r = {5};
+    for (int p = 0; p < NP; ++p) {
+        double u[3];
+        rng_unit_vector(&r, u);
+        const double d = rng_range(&r, 0.0, 0.6);
+        for (int a = 0; a < 3; ++a) pts[3 * p + a] = c[a] + d * u[a];
+    }
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, refs, NULL) == SHL_OK);
+    double err[3] = {0, 0, 0};
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 2.0, NP, pts, outs, 2) == SHL_OK);
+        for (int p = 0; p < NP; ++p) err[m] = fmax(err[m], fabs(outs[p * NV] - refs[p * NV]) / sqrt(4.0 * M_PI));
+    }
+    /* the same sphere moved to 0.15 (half a spacing) outside the face x = 1: near, not in */
+    shl_lights *l2;
+    const double c2[3] = {1.45, -0.1, 0.0};
+    CHECK(shl_lights_create(&l2) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l2, c2, 0.3, white) == SHL_OK);
+    CHECK(shl_grid_fill(g, l2, 2) == SHL_OK);
+    int n_in = -1, n_near = -1;
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_IN_BOX, 0, NULL, &n_in) == SHL_OK && n_in == 0);
+    CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &n_near) == SHL_OK && n_near == 1);
+    for (int p = 0; p < NP; ++p) { /* points of the box within 0.6 of the face x = 1 */
+        pts[3 * p] = rng_range(&r, 0.4, 1.0);
+        pts[3 * p + 1] = rng_range(&r, -1.0, 1.0);
+        pts[3 * p + 2] = rng_range(&r, -1.0, 1.0);
+    }
+    CHECK(shl_lights_eval_batch(ctx, l2, NP, pts, refs, NULL) == SHL_OK);
+    double err2[3] = {0, 0, 0}, scale2 = 0.0;
+    for (int p = 0; p < NP; ++p) scale2 = fmax(scale2, fabs(refs[p * NV]));
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 2.0, NP, pts, outs, 2) == SHL_OK);
+        for (int i = 0; i < NP * NV; ++i) err2[m] = fmax(err2[m], fabs(outs[i] - refs[i]) / scale2);
+    }
+    harness_note("sphere r 0.3 in an 8^3 box (h 0.29): L00 at its centre off by %.0f%%/%.0f%%/%.0f%% (trilinear/Taylor/Hermite); "
+                 "within 0.3 of its surface max L00 error %.0f%%/%.0f%%/%.0f%% of sqrt(4 pi); moved 0.15 outside the box "
+                 "(near): max error %.0f%%/%.0f%%/%.0f%% of max |L00|",
+                 100 * err_c[0], 100 * err_c[1], 100 * err_c[2], 100 * err[0], 100 * err[1], 100 * err[2], 100 * err2[0],
+                 100 * err2[1], 100 * err2[2]);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l2);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Clamped counts: a point is clamped iff a coordinate lies outside [lo[a], hi[a]]; points on
+ * faces, edges and corners (and -0.0 on a face at 0) are inside.  The expected count comes
+ * from the construction of each point, the values must equal shl_grid_interp's bit for bit
+ * for every method and thread count. */
+SHL_TEST(grid_interp_clamped_counts)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l = two_lights();
+    const double lo[3] = {-1.0, 0.0, 0.5}, hi[3] = {1.0, 2.0, 1.5};
+    const int res[3] = {4, 3, 5};
+    shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    CHECK(shl_grid_fill(g, l, 1) == SHL_OK);
+    const double up = nextafter(1.5, 2.0), dn = nextafter(-1.0, -2.0);
+    const double P[][4] = { /* x, y, z, clamped */
+        {0.0, 1.0, 1.0, 0},   {-1.0, 1.0, 1.0, 0}, {1.0, 1.0, 1.0, 0},  {0.3, 0.0, 1.0, 0}, {0.3, -0.0, 1.0, 0},
+        {0.3, 2.0, 1.5, 0},   {-1.0, 0.0, 0.5, 0}, {1.0, 2.0, 1.5, 0},  {0.2, 1.0, up, 1},  {dn, 1.0, 1.0, 1},
+        {5.0, 1.0, 1.0, 1},   {0.0, -1e-300, 1.0, 1}, {0.0, 1.0, -3.0, 1}, {9.0, 9.0, 9.0, 1}, {-1e300, 1.0, 1.0, 1},
+        {0.5, 0.5, 0.75, 0},  {1.0, 2.5, 0.5, 1},
+    };
+    enum { NPT = sizeof P / sizeof P[0] };
+    double pts[3 * NPT];
+    int want = 0;
+    for (int p = 0; p < NPT; ++p) {
+        for (int a = 0; a < 3; ++a) pts[3 * p + a] = P[p][a];
+        want += (int)P[p][3];
+    }
+    static double a[NPT * NV], b[NPT * NV];
+    int bad = 0;
+    for (int m = 0; m < 3; ++m) {
+        CHECK(shl_grid_interp(g, m, 1.5, NPT, pts, a, 1) == SHL_OK);
+        const int threads[3] = {1, 2, 3};
+        for (int t = 0; t < 3; ++t) {
+            int nclamped = -1;
+            CHECK(shl_grid_interp_clamped(g, m, 1.5, NPT, pts, b, threads[t], &nclamped) == SHL_OK);
+            bad += nclamped != want || memcmp(a, b, sizeof a) != 0;
+        }
+        int n1 = -1; /* point by point */
+        for (int p = 0; p < NPT; ++p) {
+            int c1 = -1;
+            CHECK(shl_grid_interp_clamped(g, m, 1.5, 1, pts + 3 * p, b, 1, &c1) == SHL_OK);
+            bad += c1 != (int)P[p][3];
+            n1 += c1;
+        }
+        bad += n1 + 1 != want;
+    }
+    CHECK(bad == 0);
+    int nclamped = -1; /* no points */
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 0, pts, b, 1, &nclamped) == SHL_OK && nclamped == 0);
+    /* bad input: status as shl_grid_interp, nothing written (count and values) */
+    double o[NV + 1];
+    const double badpt[6] = {0.0, 1.0, 1.0, 0.0, NAN, 1.0};
+    guard_fill(o, NV + 1);
+    nclamped = -1;
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 1, pts, o, 1, NULL) == SHL_ENULL);
+    CHECK(shl_grid_interp_clamped(NULL, SHL_INTERP_HERMITE, 0, 1, pts, o, 1, &nclamped) == SHL_ENULL);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 1, NULL, o, 1, &nclamped) == SHL_ENULL);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 1, pts, NULL, 1, &nclamped) == SHL_ENULL);
+    CHECK(shl_grid_interp_clamped(g, 3, 0, 1, pts, o, 1, &nclamped) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_TAYLOR, -1.0, 1, pts, o, 1, &nclamped) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, -1, pts, o, 1, &nclamped) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 1, pts, o, 0, &nclamped) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_clamped(g, SHL_INTERP_HERMITE, 0, 2, badpt, o, 1, &nclamped) == SHL_ENONFINITE);
+    CHECK(nclamped == -1 && guard_intact(o, NV + 1));
+    /* thread-creation failure: nothing written either */
+    enum { NB = 1200 };
+    static double many[3 * NB], mo[NB * NV + 1];
+    for (int i = 0; i < 3 * NB; ++i) many[i] = -2.0 + 5.0 * i / (3 * NB);
+    guard_fill(mo, NB * NV + 1);
+    shl__thread_fail_after = 0;
+    const int st = shl_grid_interp_clamped(g, SHL_INTERP_TRILINEAR, 0, NB, many, mo, 4, &nclamped);
+    shl__thread_fail_after = -1;
+    CHECK(st == SHL_ETHREAD && nclamped == -1 && guard_intact(mo, NB * NV + 1));
+    harness_note("%d points (%d outside, %d on faces/edges/corners or inside): counts exact for 3 methods x 3 thread counts",
+                 NPT, want, NPT - want);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }

@@ -20,7 +20,16 @@
  *    (to 1e-9 of the values' and gradients' scale);
  *  - a point outside the box gives the same result, bit for bit, as the point
  *    clamped to the box (documented);
- *  - interp with 1 or 2 threads gives identical results (documented). */
+ *  - interp with 1 or 2 threads gives identical results (documented);
+ *  - shl_grid_interp_clamped: the values of shl_grid_interp (bit for bit), and a
+ *    clamped count equal to the number of points with a coordinate outside [lo, hi];
+ *  - shl_grid_lights_in_box: 0 <= in-box count <= near-box count <= lights added,
+ *    indices ascending, in-box ones also near; 0 before the first fill and after a
+ *    failed one; a sphere whose (long double) distance to the box, resp. the box grown
+ *    by h, is below / above its radius by more than rounding is in / out; a polygon
+ *    with a vertex strictly inside is in; an exactly planar one whose bounding box is
+ *    disjoint from the box (by more than rounding of the coordinates) is out (same
+ *    for the grown box). */
 #include "fuzz_common.h"
 
 enum { MAXL = 3, MAXPTS = 6 };
@@ -58,6 +67,72 @@ static long double grad_bound(const double x[3], int lmax)
 }
 
 static int node_count(const int res[3]) { return res[0] * res[1] * res[2]; }
+
+/* Independent expectation for light i against the closed box [lo, hi]: 1 in, 0 out, -1 undecided. */
+static int expect_in_box(const glight *li, const double lo[3], const double hi[3])
+{
+    if (li->sphere) {
+        long double d2 = 0.0L, s = fabsl((long double)li->r);
+        for (int k = 0; k < 3; ++k) {
+            const long double c = li->c[k], d = c < lo[k] ? lo[k] - c : c > hi[k] ? c - hi[k] : 0.0L;
+            d2 += d * d;
+            s = fmaxl(s, fmaxl(fabsl(c), fmaxl(fabsl((long double)lo[k]), fabsl((long double)hi[k]))));
+        }
+        const long double d = sqrtl(d2), tol = 16.0L * DBL_EPSILON * s + 0x1p-1070L;
+        return d < li->r - tol ? 1 : d > li->r + tol ? 0 : -1;
+    }
+    const fz_poly *P = &li->P;
+    double vmin[3] = {INFINITY, INFINITY, INFINITY}, vmax[3] = {-INFINITY, -INFINITY, -INFINITY}, s = 0.0;
+    int vertex_inside = 0;
+    for (int i = 0; i < P->n; ++i) {
+        int in = 1;
+        for (int k = 0; k < 3; ++k) {
+            const double x = P->v[3 * i + k];
+            in &= lo[k] < x && x < hi[k];
+            vmin[k] = fmin(vmin[k], x);
+            vmax[k] = fmax(vmax[k], x);
+            s = fmax(s, fmax(fabs(x), fmax(fabs(lo[k]), fabs(hi[k]))));
+        }
+        vertex_inside |= in;
+    }
+    if (vertex_inside) return 1;
+    if (!(P->structured && P->exact)) return -1; /* the plane test assumes a planar polygon */
+    const double tol = 1e-9 * s + 0x1p-1070;
+    for (int k = 0; k < 3; ++k)
+        if (vmax[k] < lo[k] - tol || vmin[k] > hi[k] + tol) return 0;
+    return -1;
+}
+
+/* The lights-in-box report after a successful fill of the nl lights GL[0..nl). */
+static void check_lights_in_box(const shl_grid *grid, int nl, const double lo[3], const double hi[3], const int res[3])
+{
+    int idx[2][MAXL + 1], cnt[2] = {-1, -1};
+    double glo[3], ghi[3];
+    for (int a = 0; a < 3; ++a) { /* the library's grown box */
+        const double h = (hi[a] - lo[a]) / (res[a] - 1);
+        glo[a] = fmax(lo[a] - h, -DBL_MAX);
+        ghi[a] = fmin(hi[a] + h, DBL_MAX);
+    }
+    for (int b = 0; b < 2; ++b) {
+        const int st = shl_grid_lights_in_box(grid, b ? SHL_GRID_NEAR_BOX : SHL_GRID_IN_BOX, MAXL + 1, idx[b], &cnt[b]);
+        FUZZ_CHECK(st == SHL_OK && cnt[b] >= 0 && cnt[b] <= nl, "lights_in_box(%d) %d, count %d of %d", b, st, cnt[b], nl);
+        if (st != SHL_OK || cnt[b] < 0 || cnt[b] > nl) return;
+        for (int k = 0; k < cnt[b]; ++k)
+            FUZZ_CHECK(idx[b][k] >= 0 && idx[b][k] < nl && (k == 0 || idx[b][k] > idx[b][k - 1]), "index %d: %d", k, idx[b][k]);
+    }
+    FUZZ_CHECK(cnt[0] <= cnt[1], "in box %d > near box %d", cnt[0], cnt[1]);
+    for (int i = 0; i < nl; ++i) {
+        int got[2] = {0, 0};
+        for (int b = 0; b < 2; ++b)
+            for (int k = 0; k < cnt[b]; ++k) got[b] |= idx[b][k] == i;
+        FUZZ_CHECK(!got[0] || got[1], "light %d in the box but not near it", i);
+        const int want_in = expect_in_box(&GL[i], lo, hi), want_near = expect_in_box(&GL[i], glo, ghi);
+        if (fz_is_verbose()) fprintf(stderr, "light %d: in %d (want %d), near %d (want %d)\n", i, got[0], want_in, got[1], want_near);
+        FUZZ_CHECK(want_in < 0 || got[0] == want_in, "light %d (sphere %d): in box %d, want %d", i, GL[i].sphere, got[0], want_in);
+        FUZZ_CHECK(want_near < 0 || got[1] == want_near, "light %d (sphere %d): near box %d, want %d", i, GL[i].sphere, got[1],
+                   want_near);
+    }
+}
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -176,7 +251,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     const int sf = shl_grid_fill(grid, set, nthreads);
     FUZZ_CHECK(sf == want_fill, "fill %d, want %d", sf, want_fill);
+    {
+        int nin = -1;
+        const int sq = shl_grid_lights_in_box(grid, SHL_GRID_NEAR_BOX, 0, NULL, &nin);
+        FUZZ_CHECK(sq == SHL_OK && (sf == SHL_OK || nin == 0), "lights_in_box %d after fill %d: %d", sq, sf, nin);
+    }
     if (sf != SHL_OK) goto out;
+    check_lights_in_box(grid, ngl, lo, hi, res);
     /* nodes: equal to the direct evaluation at their positions, rounded to the storage */
     int nodes_finite = 1;
     double vmax = 0.0, gmax = 0.0;
@@ -254,6 +335,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FUZZ_CHECK(si == wi, "interp %d, want %d (method %d, b %g)", si, wi, method, b);
         if (si != SHL_OK) {
             FUZZ_CHECK(fz_untouched(out, ob), "interp wrote on error");
+            int nclamped = -1;
+            const int sc = shl_grid_interp_clamped(grid, method, b, np, pts, out, 1, &nclamped);
+            FUZZ_CHECK(sc == si && nclamped == -1 && fz_untouched(out, ob), "interp_clamped %d (interp %d) wrote on error", sc, si);
             goto next;
         }
         if (np == 0) goto next;
@@ -265,6 +349,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         FUZZ_CHECK(shl_grid_interp(grid, method, b, np, pts, out2, 2) == SHL_OK, "interp 2 threads");
         FUZZ_CHECK(memcmp(out, out2, ob) == 0, "interp depends on the thread count");
+        {
+            int outside = 0, nclamped = -1;
+            for (int p = 0; p < np; ++p) {
+                int o = 0;
+                for (int a = 0; a < 3; ++a) o |= !(lo[a] <= pts[3 * p + a] && pts[3 * p + a] <= hi[a]);
+                outside += o;
+            }
+            const int sc = shl_grid_interp_clamped(grid, method, b, np, pts, out2, 1 + (mb & 1), &nclamped);
+            FUZZ_CHECK(sc == SHL_OK && nclamped == outside, "interp_clamped %d: %d clamped, want %d", sc, nclamped, outside);
+            FUZZ_CHECK(memcmp(out, out2, ob) == 0, "interp_clamped differs from interp");
+        }
         FUZZ_CHECK(shl_grid_interp(grid, method, b, np, clamped, outc, 1) == SHL_OK, "interp clamped");
         FUZZ_CHECK(memcmp(out, outc, ob) == 0, "outside point differs from the clamped point (method %d)", method);
         for (int p = 0; p < np; ++p) {
