@@ -225,25 +225,54 @@ int shl_polygon_irradiance(const double x[3], const double normal[3], const doub
     return SHL_OK;
 }
 
+/* sum_l A_l sum_m coeffs[l(l+1)+m] y[l(l+1)+m], A_l = a[l] */
+static double sh_irradiance(int lmax, const double *coeffs, const double *y, const double *a)
+{
+    double e = 0.0;
+    for (int l = 0; l <= lmax; ++l) {
+        if (a[l] == 0.0) continue; /* odd l >= 3 */
+        double band = 0.0;
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k) band += coeffs[k] * y[k];
+        e += a[l] * band;
+    }
+    return e;
+}
+
+/* Y_k(n/|n|) and A_l: Funk-Hecke, E(n) = sum_l A_l sum_m L_lm Y_lm(n),
+ * A_l = 2 pi int_0^1 P_l(t) t dt = sqrt(4 pi / (2l+1)) zh_l
+ * (sh_convolve.c: zh_l = 2 pi K_l int_0^1 t P_l(t) dt) */
+static int irradiance_weights(int lmax, const double normal[3], double *y, double *a)
+{
+    double nrm[3];
+    int st = shl__unit(normal, nrm);
+    if (!st) st = shl_eval_basis(lmax, nrm, y);
+    if (!st) st = shl_zh_clamped_cosine(lmax, a);
+    if (st) return st;
+    for (int l = 0; l <= lmax; ++l) a[l] *= sqrt(4.0 * M_PI / (2.0 * l + 1.0));
+    return SHL_OK;
+}
+
 int shl_sh_irradiance(int lmax, const double *coeffs, const double normal[3], double *irradiance)
 {
     if (!coeffs || !normal || !irradiance) return SHL_ENULL;
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
     if (shl__check_finite(coeffs, SHL_NCOEFFS(lmax))) return SHL_ENONFINITE;
-    double nrm[3], y[SHL_NCOEFFS(SHL_LMAX_MAX)], zh[SHL_LMAX_MAX + 1];
-    int st = shl__unit(normal, nrm);
-    if (!st) st = shl_eval_basis(lmax, nrm, y);
-    if (!st) st = shl_zh_clamped_cosine(lmax, zh);
+    double y[SHL_NCOEFFS(SHL_LMAX_MAX)], a[SHL_LMAX_MAX + 1];
+    const int st = irradiance_weights(lmax, normal, y, a);
     if (st) return st;
-    /* Funk-Hecke: E(n) = sum_l A_l sum_m L_lm Y_lm(n), A_l = 2 pi int_0^1 P_l(t) t dt
-     * = sqrt(4 pi / (2l+1)) zh_l (sh_convolve.c: zh_l = 2 pi K_l int_0^1 t P_l(t) dt) */
-    double e = 0.0;
-    for (int l = 0; l <= lmax; ++l) {
-        if (zh[l] == 0.0) continue; /* odd l >= 3 */
-        double band = 0.0;
-        for (int k = l * l; k < (l + 1) * (l + 1); ++k) band += coeffs[k] * y[k];
-        e += sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * zh[l] * band;
-    }
-    *irradiance = e;
+    *irradiance = sh_irradiance(lmax, coeffs, y, a);
+    return SHL_OK;
+}
+
+int shl_sh_irradiance_rgb(int lmax, const double *rgb, const double normal[3], double irradiance[3])
+{
+    if (!rgb || !normal || !irradiance) return SHL_ENULL;
+    if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
+    const int nc = SHL_NCOEFFS(lmax);
+    if (shl__check_finite(rgb, 3 * nc)) return SHL_ENONFINITE;
+    double y[SHL_NCOEFFS(SHL_LMAX_MAX)], a[SHL_LMAX_MAX + 1];
+    const int st = irradiance_weights(lmax, normal, y, a);
+    if (st) return st;
+    for (int c = 0; c < 3; ++c) irradiance[c] = sh_irradiance(lmax, rgb + c * nc, y, a);
     return SHL_OK;
 }

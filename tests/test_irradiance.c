@@ -333,7 +333,7 @@ SHL_TEST(irradiance_small_polygons_relative)
         const double x[3] = {0.125, 0.5, -0.25}, center[3] = {0.125, 0.5, 0.75}, pn[3] = {0, 0, 1};
         double v[18];
         const int nv = 3 + it % 4;
-        random_polygon(&r, nv, 0, center, pn, size, v);
+        random_polygon(&r, nv, nv == 6, center, pn, size, v); /* 6: concave star */
         const double phi = rng_range(&r, 0, 2 * M_PI), n[3] = {sin(tilt) * cos(phi), sin(tilt) * sin(phi), cos(tilt)};
         double omega;
         CHECK(shl_polygon_solid_angle(x, v, nv, &omega) == SHL_OK);
@@ -565,6 +565,35 @@ SHL_TEST(sh_irradiance_converges_to_exact)
     harness_note("bound T(2) = %.3f, T(30) = %.4f (x Omega); worst err/bound at L=2 %.2f; err/Omega at L=30 %.2e",
                  bound[2], bound[SHL_LMAX_MAX], ratio_l2, err30_max);
     shl_ctx_destroy(ctx);
+}
+
+/* The RGB form: bit-identical to three single calls (same sums in the same order);
+ * errors before anything is written. */
+SHL_TEST(sh_irradiance_rgb_matches_single)
+{
+    rng_t r = {31};
+    for (int it = 0; it < 20; ++it) {
+        const int lmax = it % (SHL_LMAX_MAX + 1), nc = SHL_NCOEFFS(lmax);
+        double rgb[3 * NCMAX], n[3], e3[3], e;
+        for (int k = 0; k < 3 * nc; ++k) rgb[k] = rng_range(&r, -1, 1);
+        rng_unit_vector(&r, n);
+        n[0] *= 3.0;
+        CHECK(shl_sh_irradiance_rgb(lmax, rgb, n, e3) == SHL_OK);
+        for (int c = 0; c < 3; ++c) {
+            CHECK(shl_sh_irradiance(lmax, rgb + c * nc, n, &e) == SHL_OK);
+            CHECK(e == e3[c]);
+        }
+    }
+    double rgb[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, NAN}, out[3] = {GUARD_VALUE, GUARD_VALUE, GUARD_VALUE};
+    const double n[3] = {0, 0, 1}, zero[3] = {0, 0, 0};
+    CHECK(shl_sh_irradiance_rgb(1, rgb, n, out) == SHL_ENONFINITE);
+    rgb[11] = 0.0;
+    CHECK(shl_sh_irradiance_rgb(1, rgb, zero, out) == SHL_EDOMAIN);
+    CHECK(shl_sh_irradiance_rgb(31, rgb, n, out) == SHL_ELMAX);
+    CHECK(shl_sh_irradiance_rgb(1, NULL, n, out) == SHL_ENULL);
+    CHECK(shl_sh_irradiance_rgb(1, rgb, NULL, out) == SHL_ENULL);
+    CHECK(shl_sh_irradiance_rgb(1, rgb, n, NULL) == SHL_ENULL);
+    CHECK(guard_intact(out, 3));
 }
 
 /* ---- windows --------------------------------------------------------------- */
