@@ -13,9 +13,9 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-enum { NPTS = 4000, NLIGHTS = 3, NL = 6, NW = 5, LTOP = 14, NT = 20001 };
+enum { NPTS = 4000, NLIGHTS = 3, NL = 6, NW = 6, LTOP = 14, NT = 20001 };
 static const int LMAXES[NL] = {2, 4, 6, 8, 10, 14};
-static const char *WNAMES[NW] = {"none", "hanning", "lanczos", "laplacian", "laplacian*"};
+static const char *WNAMES[NW] = {"none", "hanning", "lanczos", "laplacian", "laplacian*", "poussin"};
 
 static void usage(void)
 {
@@ -28,7 +28,8 @@ static void usage(void)
            "(none; Hanning and Lanczos with width lmax+1; Laplacian with lambda = 1/(lmax(lmax+1))^2,\n"
            "i.e. the last band halved; Laplacian* with the smallest lambda for which the windowed\n"
            "clamped-cosine kernel K(t) = sum_l h_l A_l (2l+1)/(4 pi) P_l(t) is >= 0 on %d samples\n"
-           "of [-1, 1] (bisection; then any non-negative radiance gives non-negative irradiance)),\n"
+           "of [-1, 1] (bisection; then any non-negative radiance gives non-negative irradiance);\n"
+           "de la Vallee Poussin with degree lmax (non-negative by construction)),\n"
            "then shl_sh_irradiance; the exact value is the sum of\n"
            "shl_polygon_irradiance over the lights.\n"
            "A last row per lmax clamps the unwindowed result at 0.\n"
@@ -131,6 +132,7 @@ int main(int argc, char **argv)
                 if (w == 2) st = shl_sh_window(L, SHL_WINDOW_LANCZOS, L + 1.0, co);
                 if (w == 3) st = shl_sh_window(L, SHL_WINDOW_LAPLACIAN, 1.0 / pow(L * (L + 1.0), 2), co);
                 if (w == 4) st = shl_sh_window(L, SHL_WINDOW_LAPLACIAN, lstar[li], co);
+                if (w == 5) st = shl_sh_window(L, SHL_WINDOW_POUSSIN, L, co);
                 if (!st) st = shl_sh_irradiance(L, co, x, &approx[(p * NL + li) * NW + w]);
             }
         }
@@ -157,7 +159,11 @@ int main(int argc, char **argv)
     for (int li = 0; li < NL; ++li)
         for (int w = 0; w <= NW; ++w) { /* w == NW: no window, result clamped at 0 */
             const int L = LMAXES[li];
-            const double param = w == 0 || w == NW ? 0.0 : w == 3 ? 1.0 / pow(L * (L + 1.0), 2) : w == 4 ? lstar[li] : L + 1.0;
+            const double param = w == 0 || w == NW ? 0.0
+                                 : w == 3          ? 1.0 / pow(L * (L + 1.0), 2)
+                                 : w == 4          ? lstar[li]
+                                 : w == 5          ? L
+                                                   : L + 1.0;
             int neg = 0;
             double mn = 0.0, sq = 0.0, mx = 0.0;
             for (int p = 0; p < NPTS; ++p) {

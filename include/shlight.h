@@ -352,20 +352,27 @@ int shl_sh_irradiance_rgb(int lmax, const double *rgb, const double normal[3], d
  *  - SHL_WINDOW_LAPLACIAN, param = lambda >= 0 (Sloan 2008, "Stupid Spherical Harmonics
  *    Tricks", windowing): h_l = 1 / (1 + lambda l^2 (l+1)^2), the minimizer g of
  *    ||g - f||^2 + lambda ||Laplacian g||^2 (Y_lm is an eigenfunction of the
- *    Laplacian with eigenvalue -l(l+1)); lambda = 0 keeps f.
+ *    Laplacian with eigenvalue -l(l+1)); lambda = 0 keeps f;
+ *  - SHL_WINDOW_POUSSIN, param = integer degree 0 <= p <= SHL_LMAX_MAX (spherical de la
+ *    Vallee Poussin kernel): h_l = p! (p+1)! / ((p-l)! (p+l+1)!) for l <= p, 0 beyond;
+ *    the window is the convolution with the non-negative zonal kernel ((1 + w.n)/2)^p,
+ *    which has bands 0..p only, so for p <= lmax a non-negative function keeps a
+ *    non-negative windowed SH vector and non-negative shl_sh_irradiance: ringing is
+ *    removed exactly, at the price of a blur of ~2/sqrt(p) radians (use p = lmax).
  * param must be finite (SHL_ENONFINITE) and in its domain (SHL_EDOMAIN), window one of
- * the three (SHL_EDOMAIN).
+ * the four (SHL_EDOMAIN).
  * Windows shrink the negative lobes of SH *radiance* (a truncated delta: tests).  SH
  * irradiance rings for another reason: the clamped cosine truncated at lmax has a negative
  * lobe itself (min of its kernel: -0.040 at lmax 2, -0.0098 at lmax 10).  Windowing the
  * radiance makes that kernel non-negative (so every non-negative radiance gives E >= 0)
  * only with heavy damping (Laplacian lambda >= ~0.18 at every lmax; Hanning or Lanczos
- * width <= ~2): bench/bench_ringing.c measures the trade-off; clamping max(0, E) costs
- * less accuracy there.
+ * width <= ~2) or with SHL_WINDOW_POUSSIN: bench/bench_ringing.c measures the
+ * trade-off; clamping max(0, E) costs less accuracy there.
  */
 #define SHL_WINDOW_HANNING   1
 #define SHL_WINDOW_LANCZOS   2
 #define SHL_WINDOW_LAPLACIAN 3
+#define SHL_WINDOW_POUSSIN   4
 /** The factors h[0..lmax] (lmax + 1 entries) of a window. */
 int shl_sh_window_factors(int lmax, int window, double param, double *h);
 /** Window an SH vector in place: coeffs[l*(l+1)+m] *= h_l, SHL_NCOEFFS(lmax) entries

@@ -1,5 +1,6 @@
 /* SH windowing against ringing: per-band factors h_l (Hanning, Lanczos sigma,
- * Laplacian penalty of Sloan 2008), formulas in include/shlight.h. */
+ * Laplacian penalty of Sloan 2008, spherical de la Vallee Poussin), formulas in
+ * include/shlight.h. */
 #include "sh_ops.h"
 
 int shl_sh_window_factors(int lmax, int window, double param, double *h)
@@ -25,6 +26,17 @@ int shl_sh_window_factors(int lmax, int window, double param, double *h)
         for (int l = 0; l <= lmax; ++l) {
             const double ev = (double)l * (l + 1.0); /* -eigenvalue of the Laplacian on band l */
             h[l] = 1.0 / (1.0 + param * ev * ev);
+        }
+        return SHL_OK;
+    }
+    if (window == SHL_WINDOW_POUSSIN) {
+        if (!(param >= 0.0 && param <= SHL_LMAX_MAX) || param != floor(param)) return SHL_EDOMAIN;
+        /* Funk-Hecke coefficients of ((1 + t)/2)^n over those of band 0:
+         * h_l = n! (n+1)! / ((n-l)! (n+l+1)!), so h_{l+1} = h_l (n - l) / (n + l + 2) (0 beyond n) */
+        double f = 1.0;
+        for (int l = 0; l <= lmax; ++l) {
+            h[l] = f;
+            f = l < param ? f * (param - l) / (param + l + 2.0) : 0.0;
         }
         return SHL_OK;
     }

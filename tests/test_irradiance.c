@@ -446,6 +446,9 @@ SHL_TEST(irradiance_bad_input)
     CHECK(shl_sh_window_factors(3, SHL_WINDOW_LANCZOS, -1.0, h) == SHL_EDOMAIN);
     CHECK(shl_sh_window_factors(3, SHL_WINDOW_LAPLACIAN, -1e-9, h) == SHL_EDOMAIN);
     CHECK(shl_sh_window_factors(3, 0, 1.0, h) == SHL_EDOMAIN);
+    CHECK(shl_sh_window_factors(3, SHL_WINDOW_POUSSIN, 2.5, h) == SHL_EDOMAIN);
+    CHECK(shl_sh_window_factors(3, SHL_WINDOW_POUSSIN, 31.0, h) == SHL_EDOMAIN);
+    CHECK(shl_sh_window_factors(3, SHL_WINDOW_POUSSIN, -1.0, h) == SHL_EDOMAIN);
     CHECK(shl_sh_window_factors(3, SHL_WINDOW_HANNING, NAN, h) == SHL_ENONFINITE);
     CHECK(shl_sh_window_factors(-1, SHL_WINDOW_HANNING, 4.0, h) == SHL_ELMAX);
     CHECK(shl_sh_window_factors(3, SHL_WINDOW_HANNING, 4.0, NULL) == SHL_ENULL);
@@ -611,6 +614,11 @@ SHL_TEST(sh_window_factors_closed_forms)
     CHECK(shl_sh_window_factors(4, SHL_WINDOW_LAPLACIAN, 0.01, h) == SHL_OK);
     const double lap[5] = {1, 1 / 1.04, 1 / 1.36, 1 / 2.44, 1 / 5.0};
     for (int l = 0; l < 5; ++l) CHECK_NEAR(h[l], lap[l], 2 * DBL_EPSILON);
+    /* de la Vallee Poussin, p = 3: h_l = 3! 4! / ((3-l)! (4+l)!) = 1, 3/5, 1/5, 1/35, 0 */
+    CHECK(shl_sh_window_factors(4, SHL_WINDOW_POUSSIN, 3.0, h) == SHL_OK);
+    const double vp[5] = {1, 0.6, 0.2, 1.0 / 35, 0};
+    for (int l = 0; l < 5; ++l) CHECK_NEAR(h[l], vp[l], 4 * DBL_EPSILON);
+    CHECK(h[4] == 0.0);
     CHECK(shl_sh_window_factors(4, SHL_WINDOW_LAPLACIAN, 0.0, h) == SHL_OK);
     for (int l = 0; l < 5; ++l) CHECK(h[l] == 1.0);
     /* in place on a vector: band l scaled by h_l */
@@ -618,6 +626,38 @@ SHL_TEST(sh_window_factors_closed_forms)
     for (int k = 0; k < 9; ++k) co[k] = want[k] = k + 1.0;
     CHECK(shl_sh_window(2, SHL_WINDOW_HANNING, 4.0, co) == SHL_OK);
     for (int k = 0; k < 9; ++k) CHECK_NEAR(co[k], want[k] * hann[k == 0 ? 0 : k < 4 ? 1 : 2], 1e-15 * want[k]);
+}
+
+/* de la Vallee Poussin window, p = L: the windowed delta is the kernel ((1 + t)/2)^L
+ * normalized (closed form: (L+1)/(4 pi) ((1+t)/2)^L, integral 1), and the windowed
+ * clamped-cosine kernel sum_l h_l A_l (2l+1)/(4 pi) P_l(t) is a convolution of two
+ * non-negative kernels: both >= 0 (to rounding, 1e-15 x peak) on 4001 samples, L = 1..30. */
+SHL_TEST(sh_window_poussin_nonnegative)
+{
+    double worst_delta = 0.0, min_kernel = 0.0;
+    for (int L = 1; L <= SHL_LMAX_MAX; ++L) {
+        double h[SHL_LMAX_MAX + 1], zh[SHL_LMAX_MAX + 1];
+        CHECK(shl_sh_window_factors(L, SHL_WINDOW_POUSSIN, L, h) == SHL_OK);
+        CHECK(shl_zh_clamped_cosine(L, zh) == SHL_OK);
+        for (int i = 0; i <= 4000; ++i) {
+            const double t = cos(M_PI * i / 4000.0);
+            double f = h[0] / (4 * M_PI), k = zh[0] * sqrt(1 / (4 * M_PI)), p0 = 1.0, p1 = t;
+            for (int l = 1; l <= L; ++l) {
+                f += h[l] * (2 * l + 1) / (4 * M_PI) * p1;
+                k += h[l] * zh[l] * sqrt((2 * l + 1) / (4 * M_PI)) * p1; /* A_l (2l+1)/(4 pi) = zh_l K_l */
+                const double p2 = ((2 * l + 1) * t * p1 - l * p0) / (l + 1);
+                p0 = p1;
+                p1 = p2;
+            }
+            const double want = (L + 1) / (4 * M_PI) * pow(0.5 * (1 + t), L), peak = (L + 1) / (4 * M_PI);
+            worst_delta = fmax(worst_delta, fabs(f - want) / peak);
+            min_kernel = fmin(min_kernel, k);
+            CHECK(f >= -1e-15 * peak && k >= -1e-15);
+        }
+    }
+    CHECK(worst_delta <= 1e-13); /* sums of <= 31 terms ~ peak, Legendre recurrence ~ l ulps */
+    harness_note("windowed delta vs ((1+t)/2)^L closed form: %.2e x peak; min windowed irradiance kernel %.2e",
+                 worst_delta, min_kernel);
 }
 
 /* A delta at +z truncated to band L: f(theta) = sum_l h_l (2l+1)/(4 pi) P_l(cos theta).
