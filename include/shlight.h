@@ -345,6 +345,84 @@ int shl_zh_phong(int lmax, double exponent, double *zh);
  */
 int shl_zh_ggx(int lmax, double alpha, double *zh);
 
+/* ---- Irradiance ------------------------------------------------------------ */
+/**
+ * Exact unshadowed irradiance at x, surface normal `normal` (any finite, non-zero
+ * length; SHL_EDOMAIN if zero), from a unit-radiance polygon (verts, n as for
+ * shl_polygon: either winding, repeated vertices dropped):
+ *   *irradiance = integral over the polygon's solid angle at x of max(0, n . w) dw  (>= 0).
+ * The polygon is clipped to the half-space n . (p - x) >= 0 (Sutherland-Hodgman against
+ * the tangent plane at x), then Lambert's formula E = 1/2 sum_e gamma_e (n . u_e)
+ * (gamma_e: the edge's angle seen from x, u_e: unit normal of the plane through x and
+ * the edge).  A polygon entirely on or below the horizon gives exactly 0, as does a
+ * point in the polygon's plane.  E <= pi (to rounding); multiply by the radiance for a
+ * coloured light (outgoing Lambertian radiance: albedo / pi * E).
+ * Accuracy: a clipped polygon whose size is below 1/16 of its distance is integrated
+ * over its plane by a 25-point Gauss rule per fan triangle (relative error ~1e-18 from
+ * the rule, plus rounding), so tiny polygons keep full relative accuracy; larger ones
+ * use Lambert's sum, whose terms cancel by at most a factor ~ tan(angle(n, polygon)) /
+ * size in radians (<= 16 tan(...)); tests measure <= 5e-15 relative (sizes 1e-12..1,
+ * tilts <= 80 degrees).  Where the polygon crosses the horizon the clip line's position
+ * is known to ~eps x distance, so the relative error is ~eps x distance / size (tests:
+ * <= 19 eps / size).
+ */
+int shl_polygon_irradiance(const double x[3], const double normal[3], const double *verts, int n,
+                           double *irradiance);
+
+/**
+ * Irradiance from SH radiance (Funk-Hecke with the clamped cosine; Ramamoorthi &
+ * Hanrahan 2001):  *irradiance = sum_l A_l sum_m coeffs[l*(l+1)+m] Y_lm(n/|n|),
+ * A_l = 2 pi int_0^1 P_l(t) t dt = sqrt(4 pi/(2l+1)) zh_l of shl_zh_clamped_cosine
+ * (pi, 2 pi/3, pi/4, 0, -pi/24, 0, pi/64, ...; 0 for odd l >= 3).  coeffs has
+ * SHL_NCOEFFS(lmax) finite entries; normal finite, non-zero (SHL_EDOMAIN).  With
+ * shl_polygon's coefficients the truncation error is at most
+ * sum_{l > lmax} |A_l| (2l+1)/(4 pi) x solid angle (|A_l| ~ l^(-5/2)); it can make the
+ * result negative (ringing: see shl_sh_window).
+ */
+int shl_sh_irradiance(int lmax, const double *coeffs, const double normal[3], double *irradiance);
+/** The three channels of an RGB SH vector in the layout of shl_lights_eval
+ *  (rgb[c*nc + k], 3*nc finite entries, nc = SHL_NCOEFFS(lmax)): irradiance[c] equals
+ *  shl_sh_irradiance(lmax, rgb + c*nc, normal, ..) bit for bit; the basis is evaluated once. */
+int shl_sh_irradiance_rgb(int lmax, const double *rgb, const double normal[3], double irradiance[3]);
+
+/*
+ * Ringing control: SH windowing multiplies band l by a factor h_l (h_0 = 1, the
+ * function's mean is kept), trading sharpness for smaller negative lobes.
+ *  - SHL_WINDOW_HANNING, param = width w > 0:
+ *      h_l = (1 + cos(pi l / w)) / 2 for l < w, 0 for l >= w;
+ *  - SHL_WINDOW_LANCZOS, param = width w > 0 (Lanczos sigma factors):
+ *      h_l = sin(pi l / w) / (pi l / w) for 0 < l < w, h_0 = 1, 0 for l >= w;
+ *    for both, w = lmax + 1 is the usual choice (every band kept, the last one damped most);
+ *  - SHL_WINDOW_LAPLACIAN, param = lambda >= 0 (Sloan 2008, "Stupid Spherical Harmonics
+ *    Tricks", windowing): h_l = 1 / (1 + lambda l^2 (l+1)^2), the minimizer g of
+ *    ||g - f||^2 + lambda ||Laplacian g||^2 (Y_lm is an eigenfunction of the
+ *    Laplacian with eigenvalue -l(l+1)); lambda = 0 keeps f;
+ *  - SHL_WINDOW_POUSSIN, param = integer degree 0 <= p <= SHL_LMAX_MAX (spherical de la
+ *    Vallee Poussin kernel): h_l = p! (p+1)! / ((p-l)! (p+l+1)!) for l <= p, 0 beyond;
+ *    the window is the convolution with the non-negative zonal kernel ((1 + w.n)/2)^p,
+ *    which has bands 0..p only, so for p <= lmax a non-negative function keeps a
+ *    non-negative windowed SH vector and non-negative shl_sh_irradiance: ringing is
+ *    removed exactly, at the price of a blur of ~2/sqrt(p) radians (use p = lmax).
+ * param must be finite (SHL_ENONFINITE) and in its domain (SHL_EDOMAIN), window one of
+ * the four (SHL_EDOMAIN).
+ * Windows shrink the negative lobes of SH *radiance* (a truncated delta: tests).  SH
+ * irradiance rings for another reason: the clamped cosine truncated at lmax has a negative
+ * lobe itself (min of its kernel: -0.040 at lmax 2, -0.0098 at lmax 10).  Windowing the
+ * radiance makes that kernel non-negative (so every non-negative radiance gives E >= 0)
+ * only with heavy damping (Laplacian lambda >= ~0.18 at every lmax; Hanning or Lanczos
+ * width <= ~2) or with SHL_WINDOW_POUSSIN: bench/bench_ringing.c measures the
+ * trade-off; clamping max(0, E) costs less accuracy there.
+ */
+#define SHL_WINDOW_HANNING   1
+#define SHL_WINDOW_LANCZOS   2
+#define SHL_WINDOW_LAPLACIAN 3
+#define SHL_WINDOW_POUSSIN   4
+/** The factors h[0..lmax] (lmax + 1 entries) of a window. */
+int shl_sh_window_factors(int lmax, int window, double param, double *h);
+/** Window an SH vector in place: coeffs[l*(l+1)+m] *= h_l, SHL_NCOEFFS(lmax) entries
+ *  (finite: SHL_ENONFINITE, then nothing is written). */
+int shl_sh_window(int lmax, int window, double param, double *coeffs);
+
 /* ---- isotropic BRDF SH tables (HVL Sec. 4.2, Eq. 16-18) -------------------- */
 #define SHL_BRDF_GGX   1 /* kd/pi + ks D G2 F / (4 cos_i cos_o): GGX D, height-correlated
                             Smith G2, Schlick Fresnel F with reflectance f0 */
