@@ -348,12 +348,12 @@ static void report(int lmax, int n, int nthreads, int nlc, const int *counts, re
         } else {
             fmt_err(eg, sizeof eg, &res[c][p]);
             fmt_err(ef, sizeof ef, &res[c][P_FLOAT]);
-            printf("faster from %d lights on (at %d: %.2f ms, error %s; float SIMD %.2f ms, error %s)", counts[c],
-                   counts[c], res[c][p].frame * 1e3, eg, res[c][P_FLOAT].frame * 1e3, ef);
+            printf("faster from %d light%s on (at %d: %.2f ms, error %s; float SIMD %.2f ms, error %s)", counts[c],
+                   counts[c] > 1 ? "s" : "", counts[c], res[c][p].frame * 1e3, eg, res[c][P_FLOAT].frame * 1e3, ef);
         }
         printf("; static lights (interp only): ");
         if (cs < 0) printf("never faster up to %d lights.\n", counts[nlc - 1]);
-        else printf("faster from %d lights on.\n", counts[cs]);
+        else printf("faster from %d light%s on.\n", counts[cs], counts[cs] > 1 ? "s" : "");
     }
 }
 
@@ -466,8 +466,8 @@ int main(int argc, char **argv)
            "grid (its field there varies faster than the node spacing resolves: 13-24%% errors were measured\n"
            "near one), so the grid is an option only when its box is free of lights.\n"
            "Grid: res^3 float nodes (coefficients + gradients) over the receivers' bounding box; Taylor: b = 2.\n"
-           "Times: %s; best of up to %d runs within %.2f s (one run when a run takes\n"
-           "longer), after an untimed run at 1 light.\n",
+           "Times: %s.  Best of up to %d runs within %.2f s\n"
+           "(one run when a run takes longer), after an untimed run at 1 light.\n",
            n, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2],
            use_cpu ? "process CPU time (--cpu: summed over threads)" : "wall time", MAXREPS, budget);
 
