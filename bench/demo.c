@@ -1,8 +1,10 @@
 /* make demo: renders a scene (default: the embedded procedural one) with
  * software-rasterized PRT, once per lighting method, and prints the stages
- * that ran, their cost, and each method's image error against per-vertex
- * analytic shading.  Writes <out>.png / <out>.pfm (grid + Hermite, the fast
- * method), <out>-reference.png (per-vertex analytic) and <out>-error.png.
+ * that ran, their cost, each method's image error against per-vertex
+ * analytic shading (double), and which of the library's paths (per-vertex
+ * double or float SIMD, grid + Hermite / trilinear / Taylor) was fastest at
+ * this scene's light count.  Writes <out>.png / <out>.pfm (grid + Hermite),
+ * <out>-reference.png (per-vertex analytic, double) and <out>-error.png.
  *   usage: demo [scene-file] [-o out-prefix] [-c cache-dir]   (defaults: build/demo, build/cache) */
 #include "image.h"
 #include "parfor.h"
@@ -13,6 +15,51 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+
+/* Lights of s that touch or cross the box [lo, hi] (a polygon whose plane has box corners on
+ * both sides and whose bounding box overlaps the box; a sphere nearer to the box than its
+ * radius): the grid cannot follow the field near them. */
+static int lights_in_box(const scene *s, const double lo[3], const double hi[3])
+{
+    int count = 0;
+    for (int i = 0; i < s->npolys; ++i) {
+        const scene_polygon *q = &s->polys[i];
+        double nrm[3] = {0, 0, 0}, plo[3], phi[3];
+        for (int k = 1; k + 1 < q->n; ++k) { /* Newell normal as a fan */
+            const double *a = q->v, *b = q->v + 3 * k, *c = q->v + 3 * (k + 1);
+            const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            nrm[0] += e1[1] * e2[2] - e1[2] * e2[1];
+            nrm[1] += e1[2] * e2[0] - e1[0] * e2[2];
+            nrm[2] += e1[0] * e2[1] - e1[1] * e2[0];
+        }
+        int below = 0, above = 0, overlap = 1;
+        for (int k = 0; k < 8; ++k) {
+            double d = 0.0;
+            for (int a = 0; a < 3; ++a) d += nrm[a] * (((k >> a) & 1 ? hi[a] : lo[a]) - q->v[a]);
+            below |= d <= 0;
+            above |= d >= 0;
+        }
+        for (int a = 0; a < 3; ++a) {
+            plo[a] = phi[a] = q->v[a];
+            for (int k = 1; k < q->n; ++k) {
+                plo[a] = fmin(plo[a], q->v[3 * k + a]);
+                phi[a] = fmax(phi[a], q->v[3 * k + a]);
+            }
+            overlap &= plo[a] <= hi[a] && phi[a] >= lo[a];
+        }
+        count += below && above && overlap;
+    }
+    for (int i = 0; i < s->nspheres; ++i) {
+        const scene_sphere *sp = &s->spheres[i];
+        double d2 = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            const double d = fmax(0.0, fmax(lo[a] - sp->center[a], sp->center[a] - hi[a]));
+            d2 += d * d;
+        }
+        count += d2 <= sp->radius * sp->radius;
+    }
+    return count;
+}
 
 static int write_images(const char *out, const prt *p, const float *fast, const float *ref, double exposure)
 {
@@ -95,14 +142,16 @@ int main(int argc, char **argv)
         m[i].taylor_b = 2.0;
         m[i].mc_samples = s.mc_samples;
     }
-    m[0].kind = LM_ANALYTIC; /* the reference */
-    m[1].kind = LM_GRID;     /* the fast method */
-    m[1].interp = SHL_INTERP_HERMITE;
+    /* the library's paths (0: the reference), then the harness's baselines (monomial, MC) */
+    enum { NLIB = 5 };
+    m[0].kind = LM_ANALYTIC;
+    m[1].kind = LM_ANALYTIC_F;
     m[2].kind = LM_GRID;
-    m[2].interp = SHL_INTERP_TRILINEAR;
+    m[2].interp = SHL_INTERP_HERMITE;
     m[3].kind = LM_GRID;
-    m[3].interp = SHL_INTERP_TAYLOR;
-    m[4].kind = LM_ANALYTIC_F;
+    m[3].interp = SHL_INTERP_TRILINEAR;
+    m[4].kind = LM_GRID;
+    m[4].interp = SHL_INTERP_TAYLOR;
     m[5].kind = LM_MONOMIAL;
     m[6].kind = LM_MC;
     float *img[NM];
@@ -122,7 +171,16 @@ int main(int argc, char **argv)
         return 1;
     }
     const double exposure = prt_exposure(&p, img[0]);
-    const int wrote = write_images(out, &p, img[1], img[0], exposure);
+    /* lighting cost = prepare (grid fill) + per-vertex coefficients: the stages that differ by path;
+     * the grids compete only when no light touches their box */
+    const int inbox = lights_in_box(&s, p.lo, p.hi);
+    double cost[NM];
+    int best = 0;
+    for (int i = 0; i < NM; ++i) {
+        cost[i] = t[i].prepare + t[i].lighting;
+        if (i < (inbox ? 2 : NLIB) && cost[i] < cost[best]) best = i;
+    }
+    const int wrote = write_images(out, &p, img[2], img[0], exposure);
 
     printf("\n## Precomputation (once per scene)\n\n");
     prt_print_stages(&p, stdout);
@@ -136,24 +194,56 @@ int main(int argc, char **argv)
            image_compare(s.width, s.height, img[0], img[0], p.mask, exposure).pixels, exposure, raster * 1e3);
     printf("| method | prepare ms | lighting ms | shade ms | resolve ms | frame ms | MAE | RMSE | rel. MAE | rel. RMSE | sRGB MAE x1e-3 |\n"
            "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    static const char *tag[NM] = {" = reference", "", "", "", "", " (not in the library)", " (not in the library)"};
     for (int i = 0; i < NM; ++i) {
         char name[96];
         const image_error e = image_compare(s.width, s.height, img[i], img[0], p.mask, exposure);
         const double frame = t[i].prepare + t[i].lighting + t[i].shade + t[i].resolve + raster;
-        printf("| %s%s | %.2f | %.2f | %.2f | %.2f | %.2f | %.3g | %.3g | %.2e | %.2e | %.3f |\n", lighting_name(&m[i], name, sizeof name),
-               i == 0 ? " = reference" : i == 1 ? " = fast" : "", t[i].prepare * 1e3, t[i].lighting * 1e3,
+        printf("| %s%s%s | %.2f | %.2f | %.2f | %.2f | %.2f | %.3g | %.3g | %.2e | %.2e | %.3f |\n",
+               lighting_name(&m[i], name, sizeof name), tag[i], i == best ? " = fastest" : "", t[i].prepare * 1e3, t[i].lighting * 1e3,
                t[i].shade * 1e3, t[i].resolve * 1e3, frame * 1e3, e.mae, e.rmse, e.mae / e.mean_ref,
                e.rmse / e.mean_ref, e.mae_srgb * 1e3);
     }
-    const image_error fast = image_compare(s.width, s.height, img[1], img[0], p.mask, exposure);
-    printf("\nFast method (grid %d^3 + Hermite) vs per-vertex analytic: MAE %.3g (%.2e of the mean radiance %.3g), "
-           "RMSE %.3g (%.2e), max %.3g.\n",
-           s.grid_res, fast.mae, fast.mae / fast.mean_ref, fast.mean_ref, fast.rmse, fast.rmse / fast.mean_ref, fast.max_abs);
+    /* Recommendation from this run's numbers: the fastest of the library's paths, the fastest whose
+     * image error is at most TOL, and the fastest per-vertex path (float SIMD unless double measured
+     * faster) or, when a per-vertex path wins, the fastest grid. */
+    const double TOL = 1e-2;
+    char na[96], nb[96];
+    double rel[NLIB];
+    for (int i = 0; i < NLIB; ++i) {
+        const image_error ei = image_compare(s.width, s.height, img[i], img[0], p.mask, exposure);
+        rel[i] = ei.mae / ei.mean_ref;
+    }
+    int good = 0;
+    for (int i = 1; i < (inbox ? 2 : NLIB); ++i)
+        if (rel[i] <= TOL && cost[i] < cost[good]) good = i;
+    const int pv = cost[1] <= cost[0] ? 1 : 0, gbest = cost[2] <= cost[3] && cost[2] <= cost[4] ? 2 : cost[3] <= cost[4] ? 3 : 4;
+    const int other = best >= 2 ? pv : gbest;
+    printf("\nLighting cost = prepare (grid fill) + lighting (per-vertex coefficients), %d thread(s), every path alike;\n"
+           "err = relative MAE of the image vs per-vertex double (the table's rel. MAE).\n", nthreads);
+    printf("Recommendation for this scene (%d polygon + %d spherical lights, lmax %d, %d vertices):\n", s.npolys,
+           s.nspheres, s.lmax, s.geom.nv);
+    printf("  fastest at this light count: %s: %.1f ms, err %.1e\n", lighting_name(&m[best], na, sizeof na),
+           cost[best] * 1e3, rel[best]);
+    if (good != best)
+        printf("  fastest at err <= %.0e: %s: %.1f ms, err %.1e\n", TOL, lighting_name(&m[good], na, sizeof na),
+               cost[good] * 1e3, rel[good]);
+    printf("  fastest %s: %s: %.1f ms, err %.1e", best >= 2 ? "per-vertex path" : "grid",
+           lighting_name(&m[other], nb, sizeof nb), cost[other] * 1e3, rel[other]);
+    if (inbox)
+        printf(", not usable here:\n  %d light(s) touch the grid box (the receivers' bounding box) and grid results near them\n"
+               "  are wrong\n", inbox);
+    else
+        printf(" (%.2fx the time of the fastest)\n  with static lights (grids filled once): Hermite %.1f ms, trilinear %.1f ms, "
+               "Taylor %.1f ms a frame\n", cost[other] / cost[best], t[2].lighting * 1e3, t[3].lighting * 1e3,
+               t[4].lighting * 1e3);
+    printf("  (one run's timings on a possibly shared machine; build/bench/bench_paths measures every path by light\n"
+           "  count and lmax.)\n");
     if (wrote)
         printf("could not write %s.png / .pfm (does the directory exist?)\n", out);
     else
-        printf("wrote %s.png and %s.pfm (grid + Hermite), %s-reference.png (per-vertex analytic), %s-error.png "
-               "(10 x |difference|)\n", out, out, out, out);
+        printf("wrote %s.png and %s.pfm (%s), %s-reference.png (per-vertex analytic, double), %s-error.png\n"
+               "(10 x |difference|)\n", out, out, lighting_name(&m[2], na, sizeof na), out, out);
     printf("total run time %.2f s\n", bench_now() - t_start);
     for (int i = 0; i < NM; ++i) free(img[i]);
     prt_free(&p);

@@ -256,19 +256,17 @@ static void eval_block(void *arg, long begin, long end, int worker)
     const int nc = L->nc, nb = (int)(end - begin);
     const double *pts = j->pts + 3 * begin;
     double *out = malloc(sizeof(double) * 3 * (size_t)nc * BLOCK), *acc = malloc(sizeof(double) * 3 * SHL__ZH_BLOCK);
-    float *pf = malloc(sizeof(float) * (3 + 3 * (size_t)nc) * BLOCK);
+    float *pf = malloc(sizeof(float) * 3 * BLOCK);
     if (!out || !acc || !pf) goto fail;
     switch (L->m.kind) {
     case LM_ANALYTIC:
         if (shl_lights_eval_batch(L->ctx, L->set, nb, pts, out, NULL) != SHL_OK) goto fail;
         break;
-    case LM_ANALYTIC_F: { /* the set in float through the SIMD kernels */
-        float *c = pf + 3 * BLOCK;
+    case LM_ANALYTIC_F: /* the set in float through the SIMD kernels, straight into coef */
         for (int k = 0; k < 3 * nb; ++k) pf[k] = (float)pts[k];
-        if (shl_lights_eval_batch_f(L->ctx, L->set, nb, pf, c, NULL) != SHL_OK) goto fail;
-        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) out[k] = c[k];
+        if (shl_lights_eval_batch_f(L->ctx, L->set, nb, pf, j->coef + 3 * (size_t)nc * (size_t)begin, NULL) != SHL_OK)
+            goto fail;
         break;
-    }
     case LM_GRID:
         if (shl_grid_interp(L->grid, L->m.interp, L->m.taylor_b, nb, pts, out, 1) != SHL_OK) goto fail;
         break;
@@ -293,7 +291,8 @@ static void eval_block(void *arg, long begin, long end, int worker)
                 }
         break;
     }
-    for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) j->coef[3 * (size_t)nc * (size_t)begin + k] = (float)out[k];
+    if (L->m.kind != LM_ANALYTIC_F)
+        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) j->coef[3 * (size_t)nc * (size_t)begin + k] = (float)out[k];
     par_progress_add(j->prog, nb);
     free(out);
     free(acc);

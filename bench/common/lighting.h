@@ -1,7 +1,7 @@
 /* Per-vertex SH lighting of a scene's lights by one of several methods, all
  * producing the layout of shl_lights_eval (rgb[c*nc + k] per point), in float:
  *  - ANALYTIC:   shl_lights_eval_batch per vertex (double; Wang 2018), polygons and spheres;
- *  - ANALYTIC_F: shl_polygon_batch_f per light (float, SIMD), spheres by shl_sphere_f;
+ *  - ANALYTIC_F: shl_lights_eval_batch_f per vertex (float, SIMD kernels), polygons and spheres;
  *  - GRID:       a res^3 grid over the receivers (shl_grid_fill) interpolated by
  *                shl_grid_interp (Hermite, trilinear or Taylor);
  *  - MC:         Monte Carlo projection, N samples per vertex (light picked by power,
