@@ -214,30 +214,50 @@ $(BUILD)/tools/stress: tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) 
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Itests $(LDFLAGS) -o $@ tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) $(LDLIBS)
 
-# ---- Python tools: Mitsuba 3 / Dr.Jit accuracy oracle (tools/oracle.py, bench/ORACLE.md) ----
-# venv: build/venv from tools/requirements.txt, reinstalled only when that file changes
-# (its sha256 is kept in a stamp file).  oracle: full run, writes bench/ORACLE.md.
-# oracle-check: the CI subset (20 configurations, one 64x64 image); non-zero exit on any disagreement.
-# Both run the harness export tool (bench/oracle_export.c) for the image check.
+# ---- Python tools: Mitsuba 3 / Dr.Jit accuracy oracle (tools/oracle.py, bench/ORACLE.md), plots ----
+# venv: build/venv from tools/requirements.txt (Mitsuba, Dr.Jit, numpy, pillow); venv-plot:
+# build/venv-plot from tools/requirements-plot.txt (numpy, matplotlib).  Each is reinstalled
+# only when its requirements file changes (its sha256 is kept in a stamp file).
+# oracle: full run, writes bench/ORACLE.md.  oracle-check: the CI subset (20 configurations,
+# one 64x64 image); non-zero exit on any disagreement.  Both run the harness export tool
+# (bench/oracle_export.c) for the image check.  Dr.Jit's LLVM backend loads a system libLLVM at
+# run time: oracle-llvm (tools/find_libllvm.py, Python stdlib only) finds one that Dr.Jit 1.5 can
+# use, or stops at once with the command that installs one, before the venv and the build;
+# tools/oracle.py then sets DRJIT_LIBLLVM_PATH to it.  plots: tools/plot.py, bench/plots/.
 VENV       ?= build/venv
+VENV_PLOT  ?= build/venv-plot
 PYTHON     ?= python3
-VENV_STAMP := $(VENV)/.requirements.sha256
-.PHONY: venv oracle oracle-check
+# $(call venv_install,DIR,REQUIREMENTS)
+define venv_install
+@h=$$(sha256sum $(2) | cut -d' ' -f1); \
+if [ -x $(1)/bin/python ] && [ "$$(cat $(1)/.requirements.sha256 2>/dev/null)" = "$$h" ]; then \
+  echo "venv: $(1) up to date"; \
+else \
+  echo "venv: installing $(2) into $(1)"; \
+  rm -rf $(1) && $(PYTHON) -m venv $(1) && \
+  $(1)/bin/pip install -q --disable-pip-version-check -r $(2) && \
+  echo "$$h" > $(1)/.requirements.sha256; \
+fi
+endef
+ORACLE_ENV := SHLIGHT_LIB=$(abspath $(SHARED)) SHLIGHT_EXPORT=$(abspath $(BUILD)/bench/oracle_export)
+.PHONY: venv venv-plot oracle-llvm oracle oracle-check plots
 venv:
-	@h=$$(sha256sum tools/requirements.txt | cut -d' ' -f1); \
-	if [ -x $(VENV)/bin/python ] && [ "$$(cat $(VENV_STAMP) 2>/dev/null)" = "$$h" ]; then \
-	  echo "venv: $(VENV) up to date"; \
-	else \
-	  echo "venv: installing tools/requirements.txt into $(VENV)"; \
-	  rm -rf $(VENV) && $(PYTHON) -m venv $(VENV) && \
-	  $(VENV)/bin/pip install -q --disable-pip-version-check -r tools/requirements.txt && \
-	  echo "$$h" > $(VENV_STAMP); \
-	fi
+	$(call venv_install,$(VENV),tools/requirements.txt)
 
-oracle: venv $(SHARED) $(BUILD)/bench/oracle_export
-	SHLIGHT_LIB=$(abspath $(SHARED)) SHLIGHT_EXPORT=$(abspath $(BUILD)/bench/oracle_export) \
-	  $(VENV)/bin/python tools/oracle.py
+venv-plot:
+	$(call venv_install,$(VENV_PLOT),tools/requirements-plot.txt)
 
-oracle-check: venv $(SHARED) $(BUILD)/bench/oracle_export
-	SHLIGHT_LIB=$(abspath $(SHARED)) SHLIGHT_EXPORT=$(abspath $(BUILD)/bench/oracle_export) \
-	  $(VENV)/bin/python tools/oracle.py --check
+oracle-llvm:
+	@p=$$($(PYTHON) tools/find_libllvm.py) && echo "oracle: Dr.Jit's LLVM backend will use $$p"
+
+# The venv and the binaries in a sub-make, so that nothing starts before oracle-llvm passed.
+oracle: oracle-llvm
+	@$(MAKE) --no-print-directory venv $(SHARED) $(BUILD)/bench/oracle_export
+	$(ORACLE_ENV) $(VENV)/bin/python tools/oracle.py
+
+oracle-check: oracle-llvm
+	@$(MAKE) --no-print-directory venv $(SHARED) $(BUILD)/bench/oracle_export
+	$(ORACLE_ENV) $(VENV)/bin/python tools/oracle.py --check
+
+plots: venv-plot
+	$(VENV_PLOT)/bin/python tools/plot.py

@@ -52,21 +52,22 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 
-
-def _find_libllvm():
-    """Dr.Jit's LLVM backend loads libLLVM at run time.  LLVM 15 aborts on the
-    f32 'fmaximum' that Dr.Jit 1.5 emits ("Cannot select"), so prefer newer."""
-    if os.environ.get("DRJIT_LIBLLVM_PATH"):
-        return
-    d = "/usr/lib/x86_64-linux-gnu" if platform.machine() == "x86_64" else "/usr/lib/aarch64-linux-gnu"
-    for name in ("libLLVM.so.19.1", "libLLVM-19.so", "libLLVM-19.so.1", "libLLVM-18.so.1",
-                 "libLLVM-17.so.1", "libLLVM-16.so.1"):
-        if os.path.exists(os.path.join(d, name)):
-            os.environ["DRJIT_LIBLLVM_PATH"] = os.path.join(d, name)
-            return
+import find_libllvm  # noqa: E402  (standard library only)
 
 
-_find_libllvm()
+def _use_libllvm():
+    """Dr.Jit's LLVM backend loads libLLVM at run time, and aborts the process inside LLVM if
+    that one cannot compile its kernels (LLVM 15/16: "Cannot select ... fmaximum").  Choose one
+    (tools/find_libllvm.py), try it in a child process, and only then let Dr.Jit load it."""
+    path = find_libllvm.locate()
+    err = find_libllvm.probe(path)
+    if err:
+        raise SystemExit("oracle: Dr.Jit 1.5 cannot compile its kernels with %s (%s).\n%s"
+                         % (path, err, find_libllvm.install_hint()))
+    os.environ["DRJIT_LIBLLVM_PATH"] = path
+
+
+_use_libllvm()
 
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
@@ -997,7 +998,7 @@ def write_report(path, cases, elapsed, args):
     L.append("")
     L.append("- mitsuba %s (variant %s), drjit %s, numpy %s, Python %s" % (
         mi.__version__, mi.variant(), dr.__version__, np.__version__, platform.python_version()))
-    L.append("- DRJIT_LIBLLVM_PATH=%s" % os.environ.get("DRJIT_LIBLLVM_PATH", "(default)"))
+    L.append("- DRJIT_LIBLLVM_PATH=%s (tools/find_libllvm.py)" % os.environ["DRJIT_LIBLLVM_PATH"])
     L.append("- shlight: %s" % shlight.build_info())
     L.append("")
     with open(path, "w") as f:

@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Plots of the CSV files written by `make bench-tables` (bench/bench_tables.c).
 
-    build/venv/bin/python tools/plot.py [--tables bench/tables] [--out bench/plots]
+    build/venv-plot/bin/python tools/plot.py [--tables bench/tables] [--out bench/plots]
+
+'make plots' runs it with the defaults after 'make venv-plot' (numpy and matplotlib only,
+tools/requirements-plot.txt).
 
 Writes SVG and PNG files:
   accuracy_vs_time_<scene>  image error vs frame time, one curve per method
