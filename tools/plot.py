@@ -37,27 +37,71 @@ def save(fig, out, name):
     print(f"wrote {out}/{name}.svg and .png")
 
 
+def short_label(family, parameter):
+    """'lmax 8' -> 'L8', '16^3, lmax 8' -> '16^3', '4096 samples, lmax 8' -> '4096 spp'."""
+    head = parameter.split(",")[0].strip()
+    if head.startswith("lmax "):
+        return "L" + head[5:]
+    if head.endswith(" samples"):
+        return head[:-8] + " spp"
+    return head
+
+
+def pareto(points):
+    """The points no other point beats in both time and error, by increasing time."""
+    front, best = [], float("inf")
+    for x, y in sorted(points):
+        if y < best:
+            front.append((x, y))
+            best = y
+    return front
+
+
 def accuracy_vs_time(rows, out):
     scenes = OrderedDict()
     for r in rows:
         scenes.setdefault(r["scene"], OrderedDict()).setdefault(r["method"], []).append(r)
     for scene, methods in scenes.items():
-        fig, ax = plt.subplots(figsize=(7.5, 5))
-        for method, pts in methods.items():
+        fig, ax = plt.subplots(figsize=(8.5, 5.8))
+        allpts, grid_cols = [], OrderedDict()
+        for i, (method, pts) in enumerate(methods.items()):
             x = [float(p["frame_ms"]) for p in pts]
             y = [max(float(p["rel_mae"]), 1e-9) for p in pts]
-            ax.plot(x, y, marker="o", markersize=3.5, label=method)
-            ax.annotate(pts[0]["parameter"].split(",")[0], (x[0], y[0]), fontsize=6, xytext=(3, 3),
-                        textcoords="offset points")
-            ax.annotate(pts[-1]["parameter"].split(",")[0], (x[-1], y[-1]), fontsize=6, xytext=(3, -8),
-                        textcoords="offset points")
+            allpts += list(zip(x, y))
+            ax.plot(x, y, marker="o", markersize=3.5, label=method, color=f"C{i}")
+            if method.startswith("grid"):
+                # the grid curves share their resolutions: one label per resolution, above its points
+                for p, xi, yi in zip(pts, x, y):
+                    grid_cols.setdefault(short_label(method, p["parameter"]), []).append((xi, yi))
+                continue
+            below = method == "analytic float"  # same errors as double at each lmax: label it below
+            for p, xi, yi in zip(pts, x, y):
+                ax.annotate(short_label(method, p["parameter"]), (xi, yi), fontsize=6.5, color=f"C{i}",
+                            xytext=(-3, -9) if below else (3, 3), textcoords="offset points",
+                            ha="right" if below else "left")
+        for label, pts in grid_cols.items():
+            xi = sorted(p[0] for p in pts)[len(pts) // 2]
+            yi = max(p[1] for p in pts)
+            ax.annotate(label, (xi, yi), fontsize=6.5, xytext=(0, 6), textcoords="offset points", ha="center")
+        front = pareto(allpts)
+        ax.plot([p[0] for p in front], [p[1] for p in front], color="black", linewidth=6, alpha=0.15,
+                solid_capstyle="round", label="Pareto front (no point faster and more accurate)", zorder=0)
+        floor = [r for r in rows if r["scene"] == scene and r["method"] == "analytic double"
+                 and r["parameter"] == "lmax 8"]
+        if floor:
+            ax.axhline(float(floor[0]["rel_mae"]), color="grey", linestyle=":", linewidth=1)
+            ax.annotate("lmax 8 truncation error: the floor of the grid and Monte Carlo curves",
+                        (ax.get_xlim()[0], float(floor[0]["rel_mae"])), fontsize=6.5, color="grey",
+                        xytext=(4, -9), textcoords="offset points")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("frame time (ms)")
         ax.set_ylabel("image MAE / mean radiance")
-        ax.set_title(f"What accuracy costs in time: {scene}")
+        ax.set_title(f"What accuracy costs in time: {scene}\n"
+                     "(L = lmax of per-vertex analytic; grid labels = resolution at lmax 8; spp = Monte Carlo samples)",
+                     fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7, loc="upper right")
         save(fig, out, f"accuracy_vs_time_{scene}")
 
 
@@ -102,19 +146,37 @@ def wu_fig9(rows, out):
 
 
 def hvl_table1(rows, out):
+    """Ours (CPU) and the paper's (GPU) times on separate axes, then both normalized to their
+    own 3-band time at the fewest HVLs: only the shape (growth with HVLs and bands) compares."""
     bands = OrderedDict()
     for r in rows:
         bands.setdefault(r["bands"], []).append(r)
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for b, pts in bands.items():
-        ax.plot([int(p["hvls"]) for p in pts], [float(p["ms"]) for p in pts], marker="o", label=f"{b} bands (ours)")
-        ax.plot([int(p["hvls_requested"]) for p in pts], [float(p["paper_ms"]) for p in pts], linestyle="--",
-                marker="x", label=f"{b} bands (paper, GPU)")
-    ax.set_xlabel("HVLs")
-    ax.set_ylabel("gathering time (ms)")
-    ax.set_title("HVL Table 1: gathering time")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    fig, (ax_ours, ax_paper, ax_norm) = plt.subplots(1, 3, figsize=(13, 4.2))
+    base = OrderedDict()
+    for i, (b, pts) in enumerate(bands.items()):
+        base.setdefault("ours", float(pts[0]["ms"]))
+        base.setdefault("paper", float(pts[0]["paper_ms"]))
+        n_ours = [int(p["hvls"]) for p in pts]
+        n_paper = [int(p["hvls_requested"]) for p in pts]
+        ours = [float(p["ms"]) for p in pts]
+        paper = [float(p["paper_ms"]) for p in pts]
+        ax_ours.plot(n_ours, ours, marker="o", color=f"C{i}", label=f"{b} bands")
+        ax_paper.plot(n_paper, paper, marker="x", linestyle="--", color=f"C{i}", label=f"{b} bands")
+        ax_norm.plot(n_ours, [v / base["ours"] for v in ours], marker="o", color=f"C{i}", label=f"{b} bands, ours")
+        ax_norm.plot(n_paper, [v / base["paper"] for v in paper], marker="x", linestyle="--", color=f"C{i}",
+                     label=f"{b} bands, paper")
+    ax_ours.set_title("ours: CPU, 2 threads", fontsize=9)
+    ax_ours.set_ylabel("gathering time (ms)")
+    ax_paper.set_title("paper: RTX 2080 GPU (its Table 1)", fontsize=9)
+    ax_paper.set_ylabel("gathering time (ms)")
+    ax_norm.set_title("both / own 3-band time at the fewest HVLs", fontsize=9)
+    ax_norm.set_ylabel("relative time")
+    for ax in (ax_ours, ax_paper, ax_norm):
+        ax.set_xlabel("HVLs")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6.5, ncol=2 if ax is ax_norm else 1)
+    fig.suptitle("HVL Table 1: indirect-light gathering time (different hardware: compare shapes, not ms)",
+                 fontsize=10)
     save(fig, out, "hvl2022_table1")
 
 
