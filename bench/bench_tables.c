@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static FILE *md;
 static const char *csv_dir = "bench/tables";
@@ -160,6 +161,85 @@ static float *reference(prt *p, int lmax, double *seconds_all, long *nvis)
     return img;
 }
 
+/* ---- Figure material: image panels and scanlines, composed by tools/plot.py --------- */
+
+/* An image panel, box-filtered down to at most 400 pixels wide, as
+ * <csv_dir>/../plots/panels/<fig>-<panel>.png; tools/plot.py composes the figure. */
+static void write_panel(const char *fig, const char *panel, const prt *p, const float *img, double exposure)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/../plots", csv_dir);
+    mkdir(path, 0777);
+    snprintf(path, sizeof path, "%s/../plots/panels", csv_dir);
+    mkdir(path, 0777);
+    snprintf(path, sizeof path, "%s/../plots/panels/%s-%s.png", csv_dir, fig, panel);
+    const int w = p->fb.w, h = p->fb.h, k = (w + 399) / 400, dw = w / k, dh = h / k;
+    float *d = xmalloc(sizeof(float) * 3 * (size_t)dw * (size_t)dh);
+    for (int y = 0; y < dh; ++y)
+        for (int x = 0; x < dw; ++x)
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0.0;
+                for (int j = 0; j < k; ++j)
+                    for (int i = 0; i < k; ++i) sum += img[3 * ((size_t)w * (y * k + j) + x * k + i) + c];
+                d[3 * ((size_t)dw * y + x) + c] = (float)(sum / (k * k));
+            }
+    if (image_write_png(path, dw, dh, d, exposure)) fprintf(stderr, "bench_tables: cannot write %s\n", path);
+    free(d);
+}
+
+/* The error panel: 10 x |img - ref| (the papers' error images), at the same exposure. */
+static void write_error_panel(const char *fig, const char *panel, const prt *p, const float *img, const float *ref,
+                              double exposure)
+{
+    const size_t n = img_len(p->s);
+    float *e = xmalloc(sizeof(float) * n);
+    for (size_t i = 0; i < n; ++i) e[i] = 10.0f * fabsf(img[i] - ref[i]);
+    write_panel(fig, panel, p, e, exposure);
+    free(e);
+}
+
+/* Largest difference, in 8-bit sRGB levels, between two images over the masked pixels. */
+static int max_grey_levels(const prt *p, const float *a, const float *b, double exposure)
+{
+    int worst = 0;
+    for (size_t i = 0; i < (size_t)p->fb.w * (size_t)p->fb.h; ++i)
+        for (int c = 0; p->mask[i] && c < 3; ++c) {
+            const int d = abs((int)image_srgb8(exposure * a[3 * i + c]) - (int)image_srgb8(exposure * b[3 * i + c]));
+            worst = d > worst ? d : worst;
+        }
+    return worst;
+}
+
+/* One image row as a CSV (<csv_dir>/<name>): x, whether the pixel shows a receiver, and the
+ * luminance times exposure of each image (the papers' scanline plots).  The row is the middle
+ * of the rows that show receivers; returns it. */
+static int scanline_csv(const char *name, const prt *p, int n, const float *const *imgs, const char *const *labels,
+                        double exposure)
+{
+    int ylo = p->fb.h, yhi = 0;
+    for (int r = 0; r < p->fb.h; ++r)
+        for (int x = 0; x < p->fb.w; ++x)
+            if (p->mask[(size_t)p->fb.w * r + x]) {
+                ylo = r < ylo ? r : ylo;
+                yhi = r > yhi ? r : yhi;
+            }
+    const int y = ylo <= yhi ? (ylo + yhi) / 2 : p->fb.h / 2;
+    char header[512] = "x,receiver";
+    for (int k = 0; k < n; ++k) snprintf(header + strlen(header), sizeof header - strlen(header), ",%s", labels[k]);
+    FILE *csv = csv_open(name, header);
+    for (int x = 0; x < p->fb.w; ++x) {
+        const size_t i = (size_t)p->fb.w * y + x;
+        fprintf(csv, "%d,%d", x, p->mask[i] != 0);
+        for (int k = 0; k < n; ++k) {
+            const float *c = imgs[k] + 3 * i;
+            fprintf(csv, ",%.6f", exposure * (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]));
+        }
+        fputc('\n', csv);
+    }
+    csv_close(csv, name);
+    return y;
+}
+
 typedef struct {
     const shl_ctx *ctx;
     const shl_lights *lights;
@@ -257,7 +337,8 @@ static void wu_fig12(void)
                 "standing on the floor inside the receivers' bounding box (Wu Sec. 7.3: near the light's grazing\n"
                 "angle an 8^3 grid blurs the shading; finer grids are needed).  Hermite on float nodes, lmax 8,\n"
                 "%d threads, 1 run per grid.  Reference: per-vertex analytic (float SIMD) at the vertices the image\n"
-                "uses.  Compare the Monkey row of Table 1 (every light outside the box).\n\n"
+                "uses.  Compare the Monkey row of Table 1 (every light outside the box).  Image: wu2020_fig12.png\n"
+                "(reference, 8^3, 32^3 and 10x their errors).\n\n"
                 "| scene | lights | lights meeting the grid box | grid | fill ms | Hermite interp ms | MAE x1e-3 (sRGB) | rel. MAE |\n"
                 "|---|---|---|---|---|---|---|---|\n",
             nthreads);
@@ -271,10 +352,18 @@ static void wu_fig12(void)
     float *ref = reference(&p, s.lmax, &ref_s, &nvis), *img = xmalloc(sizeof(float) * img_len(&s));
     const double exposure = prt_exposure(&p, ref);
     const int inside = lights_in_grid_box(&p), res[3] = {8, 16, 32};
+    write_panel("wu2020_fig12", "reference", &p, ref, exposure);
     for (int i = 0; i < 3; ++i) {
         const lighting_method m = grid(s.lmax, res[i], SHL_INTERP_HERMITE);
         const prt_times t = render(&p, &m, NULL, 0, img, 1);
         const image_error e = image_compare(s.width, s.height, img, ref, p.mask, exposure);
+        if (res[i] != 16) {
+            char name[32];
+            snprintf(name, sizeof name, "grid%d", res[i]);
+            write_panel("wu2020_fig12", name, &p, img, exposure);
+            snprintf(name, sizeof name, "grid%d-error", res[i]);
+            write_error_panel("wu2020_fig12", name, &p, img, ref, exposure);
+        }
         fprintf(md, "| %s | %d | %d | %d^3 | %.1f | %.1f | %.3f | %.2e |\n", s.name, s.npolys, inside, res[i], t.prepare * 1e3,
                 t.lighting * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref);
         csv_text(csv, s.name);
@@ -472,6 +561,31 @@ static void section_wu_fig9(void)
         fflush(md);
     }
     csv_close(csv, "wu2020_fig9.csv");
+
+    /* Wu 2020 Fig. 7: the three interpolants at 8^3, images and the central scanline */
+    fprintf(md, "\n## Wu et al. 2020, Fig. 7: three interpolants on the 8^3 grid\n\n"
+                "The same scene and reference; float nodes.  Image: wu2020_fig7.png (reference, each interpolant and\n"
+                "10x its error, and a scanline).\n\n"
+                "| interpolant | MAE x1e-3 (sRGB) | rel. MAE | largest difference (8-bit levels) |\n|---|---|---|---|\n");
+    const int interps[3] = {SHL_INTERP_HERMITE, SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR};
+    const char *inames[3] = {"hermite", "trilinear", "taylor"}, *labels[4] = {"reference", "hermite", "trilinear", "taylor"};
+    float *imgs[3];
+    write_panel("wu2020_fig7", "reference", &p, ref, exposure);
+    for (int k = 0; k < 3; ++k) {
+        const lighting_method m = grid(s.lmax, 8, interps[k]);
+        imgs[k] = xmalloc(sizeof(float) * img_len(&s));
+        render(&p, &m, NULL, 0, imgs[k], 1);
+        const image_error e = image_compare(s.width, s.height, imgs[k], ref, p.mask, exposure);
+        fprintf(md, "| %s | %.3f | %.2e | %d |\n", inames[k], e.mae_srgb * 1e3, e.mae / e.mean_ref,
+                max_grey_levels(&p, imgs[k], ref, exposure));
+        char name[32];
+        write_panel("wu2020_fig7", inames[k], &p, imgs[k], exposure);
+        snprintf(name, sizeof name, "%s-error", inames[k]);
+        write_error_panel("wu2020_fig7", name, &p, imgs[k], ref, exposure);
+    }
+    const float *all[4] = {ref, imgs[0], imgs[1], imgs[2]};
+    fprintf(md, "\nScanline: image row %d (of %d).\n", scanline_csv("wu2020_fig7.csv", &p, 4, all, labels, exposure), s.height);
+    for (int k = 0; k < 3; ++k) free(imgs[k]);
     free(ref);
     free(img);
     prt_free(&p);
@@ -492,6 +606,42 @@ static const wang_row wang_rows[] = {
     {"wang-dragon.scene", "Dragon (Fig. 9)", "1M", 1, 38.5, 15.3},
     {"wang-face.scene", "Face (Fig. 8)", "98k", 1, 384.6, 150.0},
 };
+
+/* Wang 2018 Fig. 4: the analytic image against numerical integration (Monte Carlo projection of the
+ * same lights onto SH, per vertex), the difference and the central scanline. */
+static void wang_fig4(void)
+{
+    enum { SAMPLES = 16384 };
+    scene s;
+    if (load_scene("sweep-diffuse.scene", NULL, &s)) return;
+    prt p;
+    init_prt(&p, &s);
+    float *a = xmalloc(sizeof(float) * img_len(&s)), *mc = xmalloc(sizeof(float) * img_len(&s));
+    const lighting_method ma = method(LM_ANALYTIC, 8);
+    lighting_method mm = method(LM_MC, 8);
+    mm.mc_samples = SAMPLES;
+    render(&p, &ma, NULL, 0, a, 1);
+    render(&p, &mm, NULL, 0, mc, 1);
+    const double exposure = prt_exposure(&p, a);
+    const image_error e = image_compare(s.width, s.height, mc, a, p.mask, exposure);
+    fprintf(md, "\n## Wang & Ramamoorthi 2018, Fig. 4: analytic vs numerical integration\n\n"
+                "bench/scenes/sweep-diffuse.scene (%d vertices, 3 lights), lmax 8 (81 terms, as the paper's Fig. 4):\n"
+                "per-vertex analytic coefficients against a stratified Monte Carlo projection of the same lights with\n"
+                "%d samples per vertex.  Image: wang2018_fig4.png (both images, 10x their difference, a\n"
+                "scanline).\n\n| | MAE x1e-3 (sRGB) | rel. MAE | largest difference (8-bit levels) | paper |\n|---|---|---|---|---|\n"
+                "| Monte Carlo vs analytic | %.3f | %.2e | %d | at most one grey level |\n",
+            s.geom.nv, SAMPLES, e.mae_srgb * 1e3, e.mae / e.mean_ref, max_grey_levels(&p, mc, a, exposure));
+    write_panel("wang2018_fig4", "analytic", &p, a, exposure);
+    write_panel("wang2018_fig4", "monte-carlo", &p, mc, exposure);
+    write_error_panel("wang2018_fig4", "error", &p, mc, a, exposure);
+    const float *imgs[2] = {a, mc};
+    const char *labels[2] = {"analytic", "monte_carlo"};
+    fprintf(md, "\nScanline: image row %d (of %d).\n", scanline_csv("wang2018_fig4.csv", &p, 2, imgs, labels, exposure), s.height);
+    free(a);
+    free(mc);
+    prt_free(&p);
+    scene_free(&s);
+}
 
 static void section_wang(void)
 {
@@ -541,6 +691,7 @@ static void section_wang(void)
         scene_free(&s);
     }
     csv_close(csv, "wang2018_table2.csv");
+    wang_fig4();
     fprintf(md, "\nPaper: NVIDIA GTX 1080 Ti, vertex shader; its Table 2 has the ZH recurrence %.1f-%.1fx faster than the\n"
                 "monomial recurrence (its text: \"2x-4x faster\").\n",
             pmin, pmax);

@@ -8,6 +8,9 @@ Writes SVG and PNG files:
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
+  wang2018_fig4, wu2020_fig7, wu2020_fig12
+                            image panels written by bench_tables (<out>/panels/*.png, from the
+                            same run) in a grid, with the central scanline where its CSV exists
 A CSV that does not exist (its section was not run) is skipped with a note.
 """
 import argparse
@@ -30,11 +33,11 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
-def save(fig, out, name):
-    for ext in ("svg", "png"):
+def save(fig, out, name, exts=("svg", "png")):
+    for ext in exts:
         fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=130, bbox_inches="tight")
     plt.close(fig)
-    print(f"wrote {out}/{name}.svg and .png")
+    print(f"wrote {out}/{name}: {', '.join(exts)}")
 
 
 def short_label(family, parameter):
@@ -180,6 +183,54 @@ def hvl_table1(rows, out):
     save(fig, out, "hvl2022_table1")
 
 
+# Figures composed of the panels bench_tables writes: (panel file suffixes, titles) per row.
+PANEL_FIGURES = {
+    "wang2018_fig4": ("Wang 2018 Fig. 4: analytic vs Monte Carlo projection (lmax 8)",
+                      [[("analytic", "analytic"), ("monte-carlo", "Monte Carlo, 16384 samples"),
+                        ("error", "10 x |difference|")]], "wang2018_fig4.csv"),
+    "wu2020_fig7": ("Wu 2020 Fig. 7: interpolants on an 8^3 grid",
+                    [[("reference", "per-vertex reference"), ("hermite", "Hermite"), ("trilinear", "trilinear"),
+                      ("taylor", "Taylor")],
+                     [None, ("hermite-error", "10 x error"), ("trilinear-error", "10 x error"),
+                      ("taylor-error", "10 x error")]], "wu2020_fig7.csv"),
+    "wu2020_fig12": ("Wu 2020 Fig. 12: a two-sided light inside the grid's box",
+                     [[("reference", "per-vertex reference"), ("grid8", "8^3 Hermite"), ("grid32", "32^3 Hermite")],
+                      [None, ("grid8-error", "10 x error"), ("grid32-error", "10 x error")]], None),
+}
+
+
+def panel_figure(name, tables, out):
+    title, rows, scan = PANEL_FIGURES[name]
+    panels = os.path.join(out, "panels")
+    files = [[os.path.join(panels, f"{name}-{c[0]}.png") if c else None for c in row] for row in rows]
+    if not all(os.path.exists(f) for row in files for f in row if f):
+        print(f"plot.py: panels of {name} not found in {panels}, skipped", file=sys.stderr)
+        return
+    scan_rows = read_csv(os.path.join(tables, scan)) if scan else None
+    ncol, nrow = max(len(r) for r in rows), len(rows) + (1 if scan_rows else 0)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.6 * nrow), squeeze=False)
+    for r, row in enumerate(rows):
+        for c in range(ncol):
+            ax = axes[r][c]
+            ax.axis("off")
+            if c < len(row) and row[c]:
+                ax.imshow(plt.imread(files[r][c]))
+                ax.set_title(row[c][1], fontsize=8)
+    if scan_rows:
+        for c in range(ncol):
+            axes[-1][c].remove()
+        ax = fig.add_subplot(nrow, 1, nrow)
+        x = [int(p["x"]) for p in scan_rows]
+        for key in [k for k in scan_rows[0] if k not in ("x", "receiver")]:
+            ax.plot(x, [float(p[key]) for p in scan_rows], linewidth=1, label=key.replace("_", " "))
+        ax.set_xlabel("pixel along the scanline (the middle row of the receivers)")
+        ax.set_ylabel("luminance x exposure")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    save(fig, out, name, exts=("png",))  # raster panels: an SVG would only embed them
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tables", default="bench/tables", help="directory of the CSV files")
@@ -191,6 +242,8 @@ def main():
         rows = read_csv(os.path.join(args.tables, name))
         if rows:
             fn(rows, args.out)
+    for name in PANEL_FIGURES:
+        panel_figure(name, args.tables, args.out)
 
 
 if __name__ == "__main__":
