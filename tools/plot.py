@@ -8,7 +8,7 @@ Writes SVG and PNG files:
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
-  wang2018_fig4, wu2020_fig7, wu2020_fig12
+  wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12
                             image panels written by bench_tables (<out>/panels/*.png, from the
                             same run) in a grid, with the central scanline where its CSV exists
 A CSV that does not exist (its section was not run) is skipped with a note.
@@ -188,6 +188,8 @@ PANEL_FIGURES = {
     "wang2018_fig4": ("Wang 2018 Fig. 4: analytic vs Monte Carlo projection (lmax 8)",
                       [[("analytic", "analytic"), ("monte-carlo", "Monte Carlo, 16384 samples"),
                         ("error", "10 x |difference|")]], "wang2018_fig4.csv"),
+    "wang2018_fig5": ("Wang 2018 Fig. 5: shadows at SH orders 2, 4, 6, 8",
+                      [[("lmax2", "lmax 2"), ("lmax4", "lmax 4"), ("lmax6", "lmax 6"), ("lmax8", "lmax 8")]], None),
     "wu2020_fig7": ("Wu 2020 Fig. 7: interpolants on an 8^3 grid",
                     [[("reference", "per-vertex reference"), ("hermite", "Hermite"), ("trilinear", "trilinear"),
                       ("taylor", "Taylor")],
