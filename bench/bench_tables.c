@@ -473,6 +473,106 @@ static char *scene_text_without_lights(const char *file)
     return out;
 }
 
+/* ---- Wu 2020 Figs. 4 and 6: one coefficient along a line, gradients vs differences ---- */
+
+static void must(int st, const char *what)
+{
+    if (st != SHL_OK) {
+        fprintf(stderr, "bench_tables: %s failed (%d)\n", what, st);
+        exit(1);
+    }
+}
+
+/* Fig. 4: coefficient (7,2) of the square light (-1,-1,2)-(1,1,2) on the line y = 0.3, z = 0,
+ * x in [-2, 2] (lmax 7), from 10 samples: a 10 x 2 x 2 grid whose y/z extent is 1e-6, so each
+ * interpolant acts along the line only.  Fig. 6: d/dx of (6,-3) and (7,2) of the light
+ * (-5,-5,1)-(5,5,1) over 64 x 64 pixel centres of (3,3,0)-(6,6,0), analytic and central
+ * differences (delta 1e-3; Wu Sec. 7.1). */
+static void wu_fig4_fig6(void)
+{
+    enum { NP = 2000, NS = 10, N7 = SHL_NCOEFFS(7), K72 = 7 * 8 + 2 };
+    const double rect[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2}, white[3] = {1, 1, 1};
+    const double lo[3] = {-2.0, 0.3, 0.0}, hi[3] = {2.0, 0.3 + 1e-6, 1e-6};
+    const int res[3] = {NS, 2, 2};
+    shl_ctx *ctx;
+    shl_lights *l;
+    shl_grid *g;
+    must(shl_ctx_create(7, &ctx), "context");
+    must(shl_lights_create(&l), "lights");
+    must(shl_lights_add_polygon(l, rect, 4, white, 1), "add");
+    must(shl_grid_create(ctx, lo, hi, res, SHL_GRID_DOUBLE, &g), "grid");
+    must(shl_grid_fill(g, l, 1), "fill");
+    double *pts = xmalloc(sizeof(double) * 3 * NP), *out = xmalloc(sizeof(double) * 4 * 3 * N7 * NP);
+    for (int p = 0; p < NP; ++p) {
+        pts[3 * p] = lo[0] + (hi[0] - lo[0]) * p / (NP - 1);
+        pts[3 * p + 1] = lo[1];
+        pts[3 * p + 2] = lo[2];
+    }
+    must(shl_lights_eval_batch(ctx, l, NP, pts, out, NULL), "reference");
+    const int methods[3] = {SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR, SHL_INTERP_HERMITE};
+    const char *names[3] = {"trilinear", "Taylor (b = 2)", "Hermite"};
+    double err[3] = {0, 0, 0}, scale = 0.0;
+    for (int m = 0; m < 3; ++m)
+        must(shl_grid_interp(g, methods[m], 2.0, NP, pts, out + (size_t)(m + 1) * 3 * N7 * NP, 1), "interpolation");
+    FILE *csv = csv_open("wu2020_fig4.csv", "x,reference,trilinear,taylor_b2,hermite");
+    for (int p = 0; p < NP; ++p) {
+        const double *v[4];
+        for (int m = 0; m < 4; ++m) v[m] = out + (size_t)m * 3 * N7 * NP + (size_t)p * 3 * N7;
+        scale = fmax(scale, fabs(v[0][K72]));
+        for (int m = 0; m < 3; ++m) err[m] = fmax(err[m], fabs(v[m + 1][K72] - v[0][K72]));
+        fprintf(csv, "%.6f,%.9e,%.9e,%.9e,%.9e\n", pts[3 * p], v[0][K72], v[1][K72], v[2][K72], v[3][K72]);
+    }
+    csv_close(csv, "wu2020_fig4.csv");
+    csv = csv_open("wu2020_fig4_samples.csv", "x,value,ddx");
+    for (int i = 0; i < NS; ++i) {
+        const int idx[3] = {i, 0, 0};
+        double pos[3], v[3 * N7], gr[9 * N7];
+        must(shl_grid_node_position(g, idx, pos), "node");
+        must(shl_grid_get_node(g, idx, v, gr), "node");
+        fprintf(csv, "%.6f,%.9e,%.9e\n", pos[0], v[K72], gr[K72]);
+    }
+    csv_close(csv, "wu2020_fig4_samples.csv");
+    fprintf(md, "\n## Wu et al. 2020, Fig. 4: one coefficient along a line from 10 samples\n\n"
+                "Coefficient (7,2) of the square light (-1,-1,2)-(1,1,2), two-sided, on y = 0.3, z = 0, x in [-2, 2]\n"
+                "(lmax 7; %d points against per-point analytic); the 10 samples carry values and gradients.  Plot:\n"
+                "wu2020_fig4.png.\n\n| interpolant | max error / max abs L72 |\n|---|---|\n", NP);
+    for (int m = 0; m < 3; ++m) fprintf(md, "| %s | %.2e |\n", names[m], err[m] / scale);
+    free(pts);
+    free(out);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+
+    enum { NPIX = 64, N8 = SHL_NCOEFFS(8) };
+    const double big[12] = {-5, -5, 1, 5, -5, 1, 5, 5, 1, -5, 5, 1}, delta = 1e-3;
+    const int ks[2] = {6 * 7 - 3, 7 * 8 + 2};
+    double diff[2] = {0, 0}, gmax[2] = {0, 0};
+    must(shl_ctx_create(8, &ctx), "context");
+    csv = csv_open("wu2020_fig6.csv", "i,j,x,y,analytic_6_m3,fd_6_m3,analytic_7_2,fd_7_2");
+    for (int i = 0; i < NPIX; ++i)
+        for (int j = 0; j < NPIX; ++j) {
+            const double x[3] = {3.0 + 3.0 * (i + 0.5) / NPIX, 3.0 + 3.0 * (j + 0.5) / NPIX, 0.0};
+            const double xp[3] = {x[0] + delta, x[1], x[2]}, xm[3] = {x[0] - delta, x[1], x[2]};
+            double c[N8], gr[3 * N8], cp[N8], cm[N8], fd[2];
+            must(shl_polygon_grad(ctx, x, big, 4, c, gr), "gradient");
+            must(shl_polygon(ctx, xp, big, 4, cp), "polygon");
+            must(shl_polygon(ctx, xm, big, 4, cm), "polygon");
+            for (int q = 0; q < 2; ++q) {
+                fd[q] = (cp[ks[q]] - cm[ks[q]]) / (2 * delta);
+                diff[q] = fmax(diff[q], fabs(gr[ks[q]] - fd[q]));
+                gmax[q] = fmax(gmax[q], fabs(gr[ks[q]]));
+            }
+            fprintf(csv, "%d,%d,%.6f,%.6f,%.9e,%.9e,%.9e,%.9e\n", i, j, x[0], x[1], gr[ks[0]], fd[0], gr[ks[1]], fd[1]);
+        }
+    csv_close(csv, "wu2020_fig6.csv");
+    shl_ctx_destroy(ctx);
+    fprintf(md, "\n## Wu et al. 2020, Fig. 6: d/dx analytic vs central differences\n\n"
+                "Light (-5,-5,1)-(5,5,1); %dx%d pixel centres over (3,3,0)-(6,6,0); FD step %.0e; lmax 8.  Plot:\n"
+                "wu2020_fig6.png.\n\n| (l,m) | max abs d/dx | max abs(analytic - FD) / max abs d/dx |\n|---|---|---|\n"
+                "| (6,-3) | %.4e | %.1e |\n| (7,2) | %.4e | %.1e |\n\n(the difference is the FD truncation error, O(delta^2))\n",
+            NPIX, NPIX, delta, gmax[0], diff[0] / gmax[0], gmax[1], diff[1] / gmax[1]);
+}
+
 /* ---- Wu 2020 Fig. 8: lighting time vs light count ------------------------------ */
 
 static void section_wu_fig8(void)
@@ -524,6 +624,7 @@ static void section_wu_fig8(void)
     }
     csv_close(csv, "wu2020_fig8.csv");
     free(base);
+    wu_fig4_fig6();
 }
 
 /* ---- Wu 2020 Fig. 9: grid resolution vs time and error --------------------------- */

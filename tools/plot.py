@@ -8,6 +8,7 @@ Writes SVG and PNG files:
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
+  wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
   wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12
                             image panels written by bench_tables (<out>/panels/*.png, from the
                             same run) in a grid, with the central scanline where its CSV exists
@@ -148,6 +149,56 @@ def wu_fig9(rows, out):
     save(fig, out, "wu2020_fig9")
 
 
+def wu_fig4(rows, out, tables):
+    """The coefficient along the line, the three interpolants and the 10 samples with their slopes."""
+    x = [float(r["x"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for key, label, style in (("reference", "reference (per point)", dict(color="tab:blue", linewidth=2.5, alpha=0.5)),
+                              ("trilinear", "trilinear", dict(color="tab:red")),
+                              ("taylor_b2", "Taylor (b = 2)", dict(color="tab:cyan")),
+                              ("hermite", "Hermite", dict(color="black", linestyle="--"))):
+        ax.plot(x, [float(r[key]) for r in rows], label=label, linewidth=style.pop("linewidth", 1.2), **style)
+    samples = read_csv(os.path.join(tables, "wu2020_fig4_samples.csv")) or []
+    if samples:
+        sx = [float(p["x"]) for p in samples]
+        sv = [float(p["value"]) for p in samples]
+        ax.plot(sx, sv, "o", color="tab:orange", label="samples (value + gradient)")
+        half = 0.12
+        for xi, vi, di in zip(sx, sv, (float(p["ddx"]) for p in samples)):
+            ax.plot([xi - half, xi + half], [vi - di * half, vi + di * half], color="tab:orange", linewidth=1)
+    ax.set_xlabel("x (y = 0.3, z = 0)")
+    ax.set_ylabel("SH coefficient (7, 2)")
+    ax.set_title("Wu 2020 Fig. 4: interpolating one coefficient from 10 samples", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    save(fig, out, "wu2020_fig4")
+
+
+def wu_fig6(rows, out):
+    """d/dx of two coefficients over the region, analytic and central differences, and their difference."""
+    n = max(int(r["i"]) for r in rows) + 1
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6.4))
+    fig.subplots_adjust(wspace=0.5, hspace=0.3)
+    for q, (key, lm) in enumerate((("6_m3", "(6,-3)"), ("7_2", "(7,2)"))):
+        grids = {k: [[0.0] * n for _ in range(n)] for k in ("analytic", "fd")}
+        for r in rows:
+            i, j = int(r["i"]), int(r["j"])
+            grids["analytic"][n - 1 - j][i] = float(r[f"analytic_{key}"])
+            grids["fd"][n - 1 - j][i] = float(r[f"fd_{key}"])
+        lim = max(abs(v) for row in grids["analytic"] for v in row)
+        diff = [[a - b for a, b in zip(ra, rb)] for ra, rb in zip(grids["analytic"], grids["fd"])]
+        for c, (img, title, vmax) in enumerate(((grids["analytic"], f"d/dx {lm}, analytic", lim),
+                                                (grids["fd"], f"d/dx {lm}, central differences", lim),
+                                                (diff, "analytic - FD", max(abs(v) for row in diff for v in row)))):
+            ax = axes[q][c]
+            im = ax.imshow(img, cmap="RdBu_r", vmin=-vmax, vmax=vmax, extent=(3, 6, 3, 6))
+            ax.set_title(title, fontsize=8)
+            ax.tick_params(labelsize=6)
+            fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).ax.tick_params(labelsize=6)
+    fig.suptitle("Wu 2020 Fig. 6: SH gradients, light (-5,-5,1)-(5,5,1), region (3,3,0)-(6,6,0)", fontsize=10)
+    save(fig, out, "wu2020_fig6", exts=("png",))
+
+
 def hvl_table1(rows, out):
     """Ours (CPU) and the paper's (GPU) times on separate axes, then both normalized to their
     own 3-band time at the fewest HVLs: only the shape (growth with HVLs and bands) compares."""
@@ -244,6 +295,12 @@ def main():
         rows = read_csv(os.path.join(args.tables, name))
         if rows:
             fn(rows, args.out)
+    rows = read_csv(os.path.join(args.tables, "wu2020_fig4.csv"))
+    if rows:
+        wu_fig4(rows, args.out, args.tables)
+    rows = read_csv(os.path.join(args.tables, "wu2020_fig6.csv"))
+    if rows:
+        wu_fig6(rows, args.out)
     for name in PANEL_FIGURES:
         panel_figure(name, args.tables, args.out)
 
