@@ -9,6 +9,7 @@ Writes SVG and PNG files:
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
   wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
+  annen2004_fig8            error of one extrapolated sample vs distance
   wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12
                             image panels written by bench_tables (<out>/panels/*.png, from the
                             same run) in a grid, with the central scanline where its CSV exists
@@ -199,6 +200,22 @@ def wu_fig6(rows, out):
     save(fig, out, "wu2020_fig6", exts=("png",))
 
 
+def annen_fig8(rows, out):
+    d = [float(r["distance"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    ax.plot(d, [float(r["rms_error_gradient"]) for r in rows], marker="o", markersize=3, color="tab:green",
+            label="sample + gradient (Eq. 4)")
+    ax.plot(d, [float(r["rms_error_sample"]) for r in rows], marker="s", markersize=3, color="tab:gray",
+            label="sample alone")
+    ax.plot(d, [float(r["rms_exact"]) for r in rows], linestyle=":", color="black", label="RMS of the radiance itself")
+    ax.set_xlabel("distance from the sample (scene units; the tooth is 1.2 wide, 1.56 tall)")
+    ax.set_ylabel("RMS error of incident radiance (red)")
+    ax.set_title("Annen 2004 Fig. 8: one extrapolated sample, tooth (no occluding emitter)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, out, "annen2004_fig8")
+
+
 def hvl_table1(rows, out):
     """Ours (CPU) and the paper's (GPU) times on separate axes, then both normalized to their
     own 3-band time at the fewest HVLs: only the shape (growth with HVLs and bands) compares."""
@@ -298,6 +315,9 @@ def main():
     rows = read_csv(os.path.join(args.tables, "wu2020_fig4.csv"))
     if rows:
         wu_fig4(rows, args.out, args.tables)
+    rows = read_csv(os.path.join(args.tables, "annen2004_fig8.csv"))
+    if rows:
+        annen_fig8(rows, args.out)
     rows = read_csv(os.path.join(args.tables, "wu2020_fig6.csv"))
     if rows:
         wu_fig6(rows, args.out)
