@@ -131,6 +131,11 @@ bench-tables: $(BUILD)/bench/bench_tables
 	@mkdir -p bench/tables
 	$(BUILD)/bench/bench_tables -o bench/RESULTS-tables.md -d bench/tables
 
+# Every CSV under bench/tables parses with a constant field count (tools/check_csv.py).
+.PHONY: check-csv
+check-csv:
+	python3 tools/check_csv.py bench/tables
+
 # Regenerate the ZH lobe table (directions and weights) -- see tools/gen_lobes.c.
 lobes: $(BUILD)/tools/gen_lobes
 	$(BUILD)/tools/gen_lobes > src/zh_tables.c.new && mv src/zh_tables.c.new src/zh_tables.c

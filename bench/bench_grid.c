@@ -229,7 +229,7 @@ static double timed(void (*fn)(void *), grad_job *j) /* seconds per evaluation, 
 static void grad_cost(void)
 {
     printf("\n## Cost of analytic gradients (one quad light, double, one core)\n\n");
-    printf("| lmax | shl_polygon ns | shl_polygon_grad ns | grad / coeffs (target <= 1.4; paper 1.22-1.3) |"
+    printf("| lmax | shl_polygon ns | shl_polygon_grad ns | grad / coeffs (target <= 1.4; paper Table 1: 1.19-1.38) |"
            " central FD (7 evaluations) ns | FD / analytic (target >= 4; paper 3) |\n|---|---|---|---|---|---|\n");
     const int lmaxes[2] = {4, 8};
     static grad_job j;

@@ -2,7 +2,7 @@
  * machine with the software-rasterized PRT harness (bench/common), Markdown to
  * bench/RESULTS-tables.md (-o) and CSV files to bench/tables/ (-d).
  *   usage: bench_tables [-o file.md] [-d csv-dir] [section ...]
- *   sections: wu (Wu 2020 Table 1), wu-fig8, wu-fig9, wang (Wang 2018 Table 2),
+ *   sections: wu (Wu 2020 Table 1 and the Fig. 12 case), wu-fig8, wu-fig9, wang (Wang 2018 Table 2),
  *             annen (Annen 2004 Table 1), hvl (HVL Table 1), sweep (accuracy vs
  *             time); default: all of them.
  * Scenes come from bench/scenes; those that need ../shared/meshes say so and are
@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static FILE *md;
 static const char *csv_dir = "bench/tables";
@@ -44,6 +45,22 @@ static FILE *csv_open(const char *name, const char *header)
     }
     fprintf(f, "%s\n", header);
     return f;
+}
+
+/* One CSV text field, quoted (RFC 4180) when it holds a comma, a quote or a line break,
+ * so that every row has as many fields as the header. */
+static void csv_text(FILE *f, const char *text)
+{
+    if (!strpbrk(text, ",\"\r\n")) {
+        fputs(text, f);
+        return;
+    }
+    fputc('"', f);
+    for (; *text; ++text) {
+        if (*text == '"') fputc('"', f);
+        fputc(*text, f);
+    }
+    fputc('"', f);
 }
 
 static void csv_close(FILE *f, const char *name)
@@ -144,6 +161,85 @@ static float *reference(prt *p, int lmax, double *seconds_all, long *nvis)
     return img;
 }
 
+/* ---- Figure material: image panels and scanlines, composed by tools/plot.py --------- */
+
+/* An image panel, box-filtered down to at most 400 pixels wide, as
+ * <csv_dir>/../plots/panels/<fig>-<panel>.png; tools/plot.py composes the figure. */
+static void write_panel(const char *fig, const char *panel, const prt *p, const float *img, double exposure)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/../plots", csv_dir);
+    mkdir(path, 0777);
+    snprintf(path, sizeof path, "%s/../plots/panels", csv_dir);
+    mkdir(path, 0777);
+    snprintf(path, sizeof path, "%s/../plots/panels/%s-%s.png", csv_dir, fig, panel);
+    const int w = p->fb.w, h = p->fb.h, k = (w + 399) / 400, dw = w / k, dh = h / k;
+    float *d = xmalloc(sizeof(float) * 3 * (size_t)dw * (size_t)dh);
+    for (int y = 0; y < dh; ++y)
+        for (int x = 0; x < dw; ++x)
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0.0;
+                for (int j = 0; j < k; ++j)
+                    for (int i = 0; i < k; ++i) sum += img[3 * ((size_t)w * (y * k + j) + x * k + i) + c];
+                d[3 * ((size_t)dw * y + x) + c] = (float)(sum / (k * k));
+            }
+    if (image_write_png(path, dw, dh, d, exposure)) fprintf(stderr, "bench_tables: cannot write %s\n", path);
+    free(d);
+}
+
+/* The error panel: 10 x |img - ref| (the papers' error images), at the same exposure. */
+static void write_error_panel(const char *fig, const char *panel, const prt *p, const float *img, const float *ref,
+                              double exposure)
+{
+    const size_t n = img_len(p->s);
+    float *e = xmalloc(sizeof(float) * n);
+    for (size_t i = 0; i < n; ++i) e[i] = 10.0f * fabsf(img[i] - ref[i]);
+    write_panel(fig, panel, p, e, exposure);
+    free(e);
+}
+
+/* Largest difference, in 8-bit sRGB levels, between two images over the masked pixels. */
+static int max_grey_levels(const prt *p, const float *a, const float *b, double exposure)
+{
+    int worst = 0;
+    for (size_t i = 0; i < (size_t)p->fb.w * (size_t)p->fb.h; ++i)
+        for (int c = 0; p->mask[i] && c < 3; ++c) {
+            const int d = abs((int)image_srgb8(exposure * a[3 * i + c]) - (int)image_srgb8(exposure * b[3 * i + c]));
+            worst = d > worst ? d : worst;
+        }
+    return worst;
+}
+
+/* One image row as a CSV (<csv_dir>/<name>): x, whether the pixel shows a receiver, and the
+ * luminance times exposure of each image (the papers' scanline plots).  The row is the middle
+ * of the rows that show receivers; returns it. */
+static int scanline_csv(const char *name, const prt *p, int n, const float *const *imgs, const char *const *labels,
+                        double exposure)
+{
+    int ylo = p->fb.h, yhi = 0;
+    for (int r = 0; r < p->fb.h; ++r)
+        for (int x = 0; x < p->fb.w; ++x)
+            if (p->mask[(size_t)p->fb.w * r + x]) {
+                ylo = r < ylo ? r : ylo;
+                yhi = r > yhi ? r : yhi;
+            }
+    const int y = ylo <= yhi ? (ylo + yhi) / 2 : p->fb.h / 2;
+    char header[512] = "x,receiver";
+    for (int k = 0; k < n; ++k) snprintf(header + strlen(header), sizeof header - strlen(header), ",%s", labels[k]);
+    FILE *csv = csv_open(name, header);
+    for (int x = 0; x < p->fb.w; ++x) {
+        const size_t i = (size_t)p->fb.w * y + x;
+        fprintf(csv, "%d,%d", x, p->mask[i] != 0);
+        for (int k = 0; k < n; ++k) {
+            const float *c = imgs[k] + 3 * i;
+            fprintf(csv, ",%.6f", exposure * (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]));
+        }
+        fputc('\n', csv);
+    }
+    csv_close(csv, name);
+    return y;
+}
+
 typedef struct {
     const shl_ctx *ctx;
     const shl_lights *lights;
@@ -187,6 +283,35 @@ static double node_coeffs_time(const prt *p, int res, int reps)
     return best;
 }
 
+/* Lights whose bounding box meets the closed grid box [lo, hi] (the receivers' bounding box).
+ * Wu 2020's scenes keep their lights outside it, except Fig. 12 (Sec. 7.3), where a light
+ * inside the box needs finer grids: a table row with a count > 0 is that case. */
+static int lights_in_grid_box(const prt *p)
+{
+    const scene *s = p->s;
+    int n = 0;
+    for (int i = 0; i < s->npolys; ++i) {
+        int meets = 1;
+        for (int a = 0; a < 3; ++a) {
+            double lo = INFINITY, hi = -INFINITY;
+            for (int k = 0; k < s->polys[i].n; ++k) {
+                lo = fmin(lo, s->polys[i].v[3 * k + a]);
+                hi = fmax(hi, s->polys[i].v[3 * k + a]);
+            }
+            meets &= lo <= p->hi[a] && hi >= p->lo[a];
+        }
+        n += meets;
+    }
+    for (int i = 0; i < s->nspheres; ++i) {
+        int meets = 1;
+        for (int a = 0; a < 3; ++a)
+            meets &= s->spheres[i].center[a] - s->spheres[i].radius <= p->hi[a] &&
+                     s->spheres[i].center[a] + s->spheres[i].radius >= p->lo[a];
+        n += meets;
+    }
+    return n;
+}
+
 /* ---- Wu et al. 2020, Table 1 ----------------------------------------------- */
 
 typedef struct {
@@ -203,31 +328,86 @@ static const wu_row wu_rows[] = {
     {"wu-buddha.scene", "Buddha", "Fig. 11", "422K", "210", 4.8, 5.7, 6.0, 12.7, 78.7, 0.07, 28.6e3, 2252},
 };
 
+/* Wu 2020 Fig. 12: the wu-fig12 scene (a two-sided light inside the grid's box) at 8^3, 16^3
+ * and 32^3 against the per-vertex reference. */
+static void wu_fig12(void)
+{
+    fprintf(md, "\n## Wu et al. 2020, Fig. 12: a light inside the grid's box\n\n"
+                "bench/scenes/wu-fig12.scene: the Monkey stand-in with its side light replaced by a two-sided quad\n"
+                "standing on the floor inside the receivers' bounding box (Wu Sec. 7.3: near the light's grazing\n"
+                "angle an 8^3 grid blurs the shading; finer grids are needed).  Hermite on float nodes, lmax 8,\n"
+                "%d threads, 1 run per grid.  Reference: per-vertex analytic (float SIMD) at the vertices the image\n"
+                "uses.  Compare the Monkey row of Table 1 (every light outside the box).  Image: wu2020_fig12.png\n"
+                "(reference, 8^3, 32^3 and 10x their errors).\n\n"
+                "| scene | lights | lights meeting the grid box | grid | fill ms | Hermite interp ms | MAE x1e-3 (sRGB) | rel. MAE |\n"
+                "|---|---|---|---|---|---|---|---|\n",
+            nthreads);
+    scene s;
+    if (load_scene("wu-fig12.scene", NULL, &s)) return;
+    FILE *csv = csv_open("wu2020_fig12.csv", "scene,lights,lights_in_grid_box,res,fill_ms,interp_ms,mae_srgb_1e3,rel_mae");
+    prt p;
+    init_prt(&p, &s);
+    double ref_s;
+    long nvis;
+    float *ref = reference(&p, s.lmax, &ref_s, &nvis), *img = xmalloc(sizeof(float) * img_len(&s));
+    const double exposure = prt_exposure(&p, ref);
+    const int inside = lights_in_grid_box(&p), res[3] = {8, 16, 32};
+    write_panel("wu2020_fig12", "reference", &p, ref, exposure);
+    for (int i = 0; i < 3; ++i) {
+        const lighting_method m = grid(s.lmax, res[i], SHL_INTERP_HERMITE);
+        const prt_times t = render(&p, &m, NULL, 0, img, 1);
+        const image_error e = image_compare(s.width, s.height, img, ref, p.mask, exposure);
+        if (res[i] != 16) {
+            char name[32];
+            snprintf(name, sizeof name, "grid%d", res[i]);
+            write_panel("wu2020_fig12", name, &p, img, exposure);
+            snprintf(name, sizeof name, "grid%d-error", res[i]);
+            write_error_panel("wu2020_fig12", name, &p, img, ref, exposure);
+        }
+        fprintf(md, "| %s | %d | %d | %d^3 | %.1f | %.1f | %.3f | %.2e |\n", s.name, s.npolys, inside, res[i], t.prepare * 1e3,
+                t.lighting * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref);
+        csv_text(csv, s.name);
+        fprintf(csv, ",%d,%d,%d,%.4f,%.4f,%.5f,%.4e\n", s.npolys, inside, res[i], t.prepare * 1e3, t.lighting * 1e3,
+                e.mae_srgb * 1e3, e.mae / e.mean_ref);
+        fflush(md);
+    }
+    csv_close(csv, "wu2020_fig12.csv");
+    free(ref);
+    free(img);
+    prt_free(&p);
+    scene_free(&s);
+}
+
 static void section_wu(void)
 {
     fprintf(md, "\n## Wu et al. 2020, Table 1: scene statistics, grid 8^3 + Hermite vs per-vertex analytic\n\n"
                 "Stand-ins (bench/scenes/wu-*.scene, each file says which mesh and how it is subdivided): the paper's\n"
                 "triangle and light counts, meshes from ../shared/meshes subdivided (uniform 1-to-4, then longest-edge\n"
-                "bisection) to them, textured lights split into the paper's number of uniform triangles.  lmax 8,\n"
-                "unshadowed diffuse transfer (the timed stages do not depend on it), 800x600, %d threads, float grid\n"
-                "nodes.  Eval coeff: coefficients only at the 512 nodes (shl_lights_eval_batch); eval coeff & grad:\n"
-                "shl_grid_fill; interp: Hermite at every vertex; total adds shading (transfer dot products), the\n"
-                "visibility raster and resolving the image.  Reference: per-vertex analytic shading (Wang 2018, our\n"
-                "float SIMD path shl_lights_eval_batch_f), computed at the vertices the image uses and its time scaled to\n"
-                "all vertices.  MAE: 8-bit sRGB images in [0,1] units (x1e-3, as the paper) and linear relative.\n"
-                "Times: best of 3 (reference: 1 run).\n\n",
+                "bisection) to them, textured lights split into the paper's number of uniform triangles, every light\n"
+                "outside the grid's box as in the paper (column \"in box\": lights whose bounding box meets it; the\n"
+                "paper's Fig. 12 case has its own table below).  Dragon & Bunny and Buddha are glossy (Phong) with the\n"
+                "lighting at lmax 4 as the paper's Figs. 1 and 11 (Sec. 7.2); the others diffuse at lmax 8.  Unshadowed\n"
+                "transfer, 800x600, %d threads, float grid nodes.  Eval coeff: coefficients only at the 512 nodes\n"
+                "(shl_lights_eval_batch); eval coeff & grad: shl_grid_fill; grad/coeff: their ratio; interp: Hermite\n"
+                "at every vertex (shl_grid_interp); total adds shading (transfer dot products, glossy lobes), the\n"
+                "visibility raster and resolving the image.  Reference: per-vertex analytic shading (Wang 2018) by the\n"
+                "fastest per-vertex path, shl_lights_eval_batch_f (float SIMD), computed at the vertices the image uses\n"
+                "and its time scaled to all vertices; speed-up = reference / total, i.e. the library's fastest\n"
+                "per-vertex path against its grid path (shl_grid_fill + shl_grid_interp).  MAE: 8-bit sRGB images in\n"
+                "[0,1] units (x1e-3, as the paper) and linear relative.  Times: best of 3 (reference: 1 run).\n\n",
             nthreads);
-    fprintf(md, "| scene (stand-in) | triangles | vertices | lights | grid | eval coeff ms | eval coeff & grad ms | interp ms | "
-                "shade + raster ms | total ms | FPS | MAE x1e-3 | rel. MAE | reference ms | speed-up |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    fprintf(md, "| scene (stand-in) | triangles | vertices | lights | in box | lmax | grid | eval coeff ms | eval coeff & grad ms | "
+                "grad/coeff | interp ms | shade + raster ms | total ms | FPS | MAE x1e-3 | rel. MAE | reference ms | speed-up |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     FILE *csv = NULL;
     for (unsigned r = 0; r < sizeof wu_rows / sizeof wu_rows[0]; ++r) {
         const wu_row *w = &wu_rows[r];
         scene s;
         if (load_scene(w->file, NULL, &s)) continue;
         if (!csv)
-            csv = csv_open("wu2020_table1.csv", "scene,triangles,vertices,lights,grid,eval_coeff_ms,eval_coeff_grad_ms,interp_ms,"
-                                                "shade_raster_ms,total_ms,fps,mae_srgb_1e3,rel_mae,reference_ms,speedup");
+            csv = csv_open("wu2020_table1.csv", "scene,triangles,vertices,lights,lights_in_grid_box,lmax,grid,eval_coeff_ms,"
+                                                "eval_coeff_grad_ms,interp_ms,shade_raster_ms,total_ms,fps,mae_srgb_1e3,rel_mae,"
+                                                "reference_ms,speedup");
         prt p;
         init_prt(&p, &s);
         float *img = xmalloc(sizeof(float) * img_len(&s));
@@ -239,12 +419,15 @@ static void section_wu(void)
         float *ref = reference(&p, s.lmax, &ref_s, &nvis);
         const image_error e = image_compare(s.width, s.height, img, ref, p.mask, prt_exposure(&p, ref));
         const double rest = t.shade + raster + t.resolve, total = t.prepare + t.lighting + rest;
-        fprintf(md, "| %s | %d | %d | %d | 8^3 | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f | %.2f | %.2e | %.3g | %.1fx |\n",
-                w->scene, s.geom.nt, s.geom.nv, s.npolys, coeff * 1e3, t.prepare * 1e3, t.lighting * 1e3, rest * 1e3,
-                total * 1e3, 1.0 / total, e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3, ref_s / total);
-        fprintf(csv, "%s,%d,%d,%d,8,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4e,%.4f,%.3f\n", w->scene, s.geom.nt, s.geom.nv, s.npolys,
-                coeff * 1e3, t.prepare * 1e3, t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total, e.mae_srgb * 1e3,
-                e.mae / e.mean_ref, ref_s * 1e3, ref_s / total);
+        const int inside = lights_in_grid_box(&p);
+        fprintf(md, "| %s | %d | %d | %d | %d | %d | 8^3 | %.1f | %.1f | %.2f | %.1f | %.1f | %.1f | %.2f | %.2f | %.2e | %.3g | %.1fx |\n",
+                w->scene, s.geom.nt, s.geom.nv, s.npolys, inside, s.lmax, coeff * 1e3, t.prepare * 1e3, t.prepare / coeff,
+                t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total, e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3,
+                ref_s / total);
+        csv_text(csv, w->scene);
+        fprintf(csv, ",%d,%d,%d,%d,%d,8,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4e,%.4f,%.3f\n", s.geom.nt, s.geom.nv, s.npolys,
+                inside, s.lmax, coeff * 1e3, t.prepare * 1e3, t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total,
+                e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3, ref_s / total);
         fflush(md);
         free(img);
         free(ref);
@@ -253,13 +436,22 @@ static void section_wu(void)
     }
     csv_close(csv, "wu2020_table1.csv");
     fprintf(md, "\nThe paper (NVIDIA RTX 2080 Ti, GPU shaders in Falcor; its MAE scale is not stated beyond x1e-3):\n\n"
-                "| scene | triangles | lights | grid | eval coeff ms | eval coeff & grad ms | interp ms | total ms | FPS | MAE x1e-3 | reference ms | speed-up |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "| scene | triangles | lights | grid | eval coeff ms | eval coeff & grad ms | grad/coeff | interp ms | total ms | FPS | MAE x1e-3 | reference ms | speed-up | reference / total |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    double gmin = INFINITY, gmax = 0.0;
     for (unsigned r = 0; r < sizeof wu_rows / sizeof wu_rows[0]; ++r) {
         const wu_row *w = &wu_rows[r];
-        fprintf(md, "| %s (%s) | %s | %s | 8^3 | %.2f | %.1f | %.1f | %.1f | %.1f | %.2f | %.3g | %.0fx |\n", w->scene, w->figure,
-                w->tris, w->lights, w->eval, w->evalgrad, w->interp, w->total, w->fps, w->mae, w->ref, w->speedup);
+        gmin = fmin(gmin, w->evalgrad / w->eval);
+        gmax = fmax(gmax, w->evalgrad / w->eval);
+        fprintf(md, "| %s (%s) | %s | %s | 8^3 | %.2f | %.1f | %.2f | %.1f | %.1f | %.1f | %.2f | %.3g | %.0fx | %.0fx |\n", w->scene,
+                w->figure, w->tris, w->lights, w->eval, w->evalgrad, w->evalgrad / w->eval, w->interp, w->total, w->fps, w->mae,
+                w->ref, w->speedup, w->ref / w->total);
     }
+    fprintf(md, "\nThe paper's gradient overhead (eval coeff & grad / eval coeff) is %.2f-%.2f.  Its speed-up column is\n"
+                "reference / total in every row but Monkey, where 177 / 3.3 = 54x while the table prints 35x (a\n"
+                "reference of 117 ms would give 35x); the last column recomputes it.\n",
+            gmin, gmax);
+    wu_fig12();
 }
 
 /* A scene file's text without its `light` lines, for experiments that replace the lights. */
@@ -281,6 +473,106 @@ static char *scene_text_without_lights(const char *file)
     return out;
 }
 
+/* ---- Wu 2020 Figs. 4 and 6: one coefficient along a line, gradients vs differences ---- */
+
+static void must(int st, const char *what)
+{
+    if (st != SHL_OK) {
+        fprintf(stderr, "bench_tables: %s failed (%d)\n", what, st);
+        exit(1);
+    }
+}
+
+/* Fig. 4: coefficient (7,2) of the square light (-1,-1,2)-(1,1,2) on the line y = 0.3, z = 0,
+ * x in [-2, 2] (lmax 7), from 10 samples: a 10 x 2 x 2 grid whose y/z extent is 1e-6, so each
+ * interpolant acts along the line only.  Fig. 6: d/dx of (6,-3) and (7,2) of the light
+ * (-5,-5,1)-(5,5,1) over 64 x 64 pixel centres of (3,3,0)-(6,6,0), analytic and central
+ * differences (delta 1e-3; Wu Sec. 7.1). */
+static void wu_fig4_fig6(void)
+{
+    enum { NP = 2000, NS = 10, N7 = SHL_NCOEFFS(7), K72 = 7 * 8 + 2 };
+    const double rect[12] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2}, white[3] = {1, 1, 1};
+    const double lo[3] = {-2.0, 0.3, 0.0}, hi[3] = {2.0, 0.3 + 1e-6, 1e-6};
+    const int res[3] = {NS, 2, 2};
+    shl_ctx *ctx;
+    shl_lights *l;
+    shl_grid *g;
+    must(shl_ctx_create(7, &ctx), "context");
+    must(shl_lights_create(&l), "lights");
+    must(shl_lights_add_polygon(l, rect, 4, white, 1), "add");
+    must(shl_grid_create(ctx, lo, hi, res, SHL_GRID_DOUBLE, &g), "grid");
+    must(shl_grid_fill(g, l, 1), "fill");
+    double *pts = xmalloc(sizeof(double) * 3 * NP), *out = xmalloc(sizeof(double) * 4 * 3 * N7 * NP);
+    for (int p = 0; p < NP; ++p) {
+        pts[3 * p] = lo[0] + (hi[0] - lo[0]) * p / (NP - 1);
+        pts[3 * p + 1] = lo[1];
+        pts[3 * p + 2] = lo[2];
+    }
+    must(shl_lights_eval_batch(ctx, l, NP, pts, out, NULL), "reference");
+    const int methods[3] = {SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR, SHL_INTERP_HERMITE};
+    const char *names[3] = {"trilinear", "Taylor (b = 2)", "Hermite"};
+    double err[3] = {0, 0, 0}, scale = 0.0;
+    for (int m = 0; m < 3; ++m)
+        must(shl_grid_interp(g, methods[m], 2.0, NP, pts, out + (size_t)(m + 1) * 3 * N7 * NP, 1), "interpolation");
+    FILE *csv = csv_open("wu2020_fig4.csv", "x,reference,trilinear,taylor_b2,hermite");
+    for (int p = 0; p < NP; ++p) {
+        const double *v[4];
+        for (int m = 0; m < 4; ++m) v[m] = out + (size_t)m * 3 * N7 * NP + (size_t)p * 3 * N7;
+        scale = fmax(scale, fabs(v[0][K72]));
+        for (int m = 0; m < 3; ++m) err[m] = fmax(err[m], fabs(v[m + 1][K72] - v[0][K72]));
+        fprintf(csv, "%.6f,%.9e,%.9e,%.9e,%.9e\n", pts[3 * p], v[0][K72], v[1][K72], v[2][K72], v[3][K72]);
+    }
+    csv_close(csv, "wu2020_fig4.csv");
+    csv = csv_open("wu2020_fig4_samples.csv", "x,value,ddx");
+    for (int i = 0; i < NS; ++i) {
+        const int idx[3] = {i, 0, 0};
+        double pos[3], v[3 * N7], gr[9 * N7];
+        must(shl_grid_node_position(g, idx, pos), "node");
+        must(shl_grid_get_node(g, idx, v, gr), "node");
+        fprintf(csv, "%.6f,%.9e,%.9e\n", pos[0], v[K72], gr[K72]);
+    }
+    csv_close(csv, "wu2020_fig4_samples.csv");
+    fprintf(md, "\n## Wu et al. 2020, Fig. 4: one coefficient along a line from 10 samples\n\n"
+                "Coefficient (7,2) of the square light (-1,-1,2)-(1,1,2), two-sided, on y = 0.3, z = 0, x in [-2, 2]\n"
+                "(lmax 7; %d points against per-point analytic); the 10 samples carry values and gradients.  Plot:\n"
+                "wu2020_fig4.png.\n\n| interpolant | max error / max abs L72 |\n|---|---|\n", NP);
+    for (int m = 0; m < 3; ++m) fprintf(md, "| %s | %.2e |\n", names[m], err[m] / scale);
+    free(pts);
+    free(out);
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+
+    enum { NPIX = 64, N8 = SHL_NCOEFFS(8) };
+    const double big[12] = {-5, -5, 1, 5, -5, 1, 5, 5, 1, -5, 5, 1}, delta = 1e-3;
+    const int ks[2] = {6 * 7 - 3, 7 * 8 + 2};
+    double diff[2] = {0, 0}, gmax[2] = {0, 0};
+    must(shl_ctx_create(8, &ctx), "context");
+    csv = csv_open("wu2020_fig6.csv", "i,j,x,y,analytic_6_m3,fd_6_m3,analytic_7_2,fd_7_2");
+    for (int i = 0; i < NPIX; ++i)
+        for (int j = 0; j < NPIX; ++j) {
+            const double x[3] = {3.0 + 3.0 * (i + 0.5) / NPIX, 3.0 + 3.0 * (j + 0.5) / NPIX, 0.0};
+            const double xp[3] = {x[0] + delta, x[1], x[2]}, xm[3] = {x[0] - delta, x[1], x[2]};
+            double c[N8], gr[3 * N8], cp[N8], cm[N8], fd[2];
+            must(shl_polygon_grad(ctx, x, big, 4, c, gr), "gradient");
+            must(shl_polygon(ctx, xp, big, 4, cp), "polygon");
+            must(shl_polygon(ctx, xm, big, 4, cm), "polygon");
+            for (int q = 0; q < 2; ++q) {
+                fd[q] = (cp[ks[q]] - cm[ks[q]]) / (2 * delta);
+                diff[q] = fmax(diff[q], fabs(gr[ks[q]] - fd[q]));
+                gmax[q] = fmax(gmax[q], fabs(gr[ks[q]]));
+            }
+            fprintf(csv, "%d,%d,%.6f,%.6f,%.9e,%.9e,%.9e,%.9e\n", i, j, x[0], x[1], gr[ks[0]], fd[0], gr[ks[1]], fd[1]);
+        }
+    csv_close(csv, "wu2020_fig6.csv");
+    shl_ctx_destroy(ctx);
+    fprintf(md, "\n## Wu et al. 2020, Fig. 6: d/dx analytic vs central differences\n\n"
+                "Light (-5,-5,1)-(5,5,1); %dx%d pixel centres over (3,3,0)-(6,6,0); FD step %.0e; lmax 8.  Plot:\n"
+                "wu2020_fig6.png.\n\n| (l,m) | max abs d/dx | max abs(analytic - FD) / max abs d/dx |\n|---|---|---|\n"
+                "| (6,-3) | %.4e | %.1e |\n| (7,2) | %.4e | %.1e |\n\n(the difference is the FD truncation error, O(delta^2))\n",
+            NPIX, NPIX, delta, gmax[0], diff[0] / gmax[0], gmax[1], diff[1] / gmax[1]);
+}
+
 /* ---- Wu 2020 Fig. 8: lighting time vs light count ------------------------------ */
 
 static void section_wu_fig8(void)
@@ -290,9 +582,11 @@ static void section_wu_fig8(void)
                 "(-1.5, 2.8, -1.5)-(1.5, 2.8, 1.5), one-sided, as 1 quad or split into N uniform triangles\n"
                 "(the paper subdivides a rectangular light up to 512 triangles).  lmax 8, %d threads.  Times are\n"
                 "the lighting only (coefficients at every vertex), best of 2; the grid column is fill (with\n"
-                "gradients) + Hermite interpolation.  Error: the grid image vs the per-vertex analytic image.\n\n"
-                "| lights | per-vertex analytic (double) ms | per-vertex analytic (float SIMD) ms | grid fill ms | Hermite interp ms | grid total ms | speed-up vs double | rel. MAE |\n"
-                "|---|---|---|---|---|---|---|---|\n",
+                "gradients, shl_grid_fill) + Hermite interpolation (shl_grid_interp).  Speed-ups: the grid against\n"
+                "each per-vertex path; the float SIMD one is the fastest per-vertex path.  Error: the grid image vs\n"
+                "the per-vertex analytic image.\n\n"
+                "| lights | per-vertex analytic (double) ms | per-vertex analytic (float SIMD) ms | grid fill ms | Hermite interp ms | grid total ms | speed-up vs double | speed-up vs float SIMD | rel. MAE |\n"
+                "|---|---|---|---|---|---|---|---|---|\n",
             nthreads);
     char *base = scene_text_without_lights("wu-monkey.scene");
     FILE *csv = NULL;
@@ -308,7 +602,8 @@ static void section_wu_fig8(void)
         free(text);
         if (st) break;
         if (!csv)
-            csv = csv_open("wu2020_fig8.csv", "lights,pervertex_double_ms,pervertex_float_ms,grid_fill_ms,grid_interp_ms,grid_total_ms,rel_mae");
+            csv = csv_open("wu2020_fig8.csv", "lights,pervertex_double_ms,pervertex_float_ms,grid_fill_ms,grid_interp_ms,grid_total_ms,"
+                                              "speedup_vs_double,speedup_vs_float,rel_mae");
         prt p;
         init_prt(&p, &s);
         float *a = xmalloc(sizeof(float) * img_len(&s)), *g = xmalloc(sizeof(float) * img_len(&s));
@@ -316,11 +611,11 @@ static void section_wu_fig8(void)
         const prt_times td = render(&p, &md_, NULL, 0, a, nl <= 64 ? 2 : 1), tf = render(&p, &mf, NULL, 0, a, 2);
         const prt_times tg = render(&p, &mg, NULL, 0, g, 2);
         const image_error e = image_compare(s.width, s.height, g, a, p.mask, 1.0);
-        fprintf(md, "| %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1fx | %.2e |\n", nl, td.lighting * 1e3, tf.lighting * 1e3,
-                tg.prepare * 1e3, tg.lighting * 1e3, (tg.prepare + tg.lighting) * 1e3, td.lighting / (tg.prepare + tg.lighting),
-                e.mae / e.mean_ref);
-        fprintf(csv, "%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4e\n", nl, td.lighting * 1e3, tf.lighting * 1e3, tg.prepare * 1e3,
-                tg.lighting * 1e3, (tg.prepare + tg.lighting) * 1e3, e.mae / e.mean_ref);
+        const double tgrid = tg.prepare + tg.lighting;
+        fprintf(md, "| %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1fx | %.1fx | %.2e |\n", nl, td.lighting * 1e3, tf.lighting * 1e3,
+                tg.prepare * 1e3, tg.lighting * 1e3, tgrid * 1e3, td.lighting / tgrid, tf.lighting / tgrid, e.mae / e.mean_ref);
+        fprintf(csv, "%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4e\n", nl, td.lighting * 1e3, tf.lighting * 1e3, tg.prepare * 1e3,
+                tg.lighting * 1e3, tgrid * 1e3, td.lighting / tgrid, tf.lighting / tgrid, e.mae / e.mean_ref);
         fflush(md);
         free(a);
         free(g);
@@ -329,6 +624,7 @@ static void section_wu_fig8(void)
     }
     csv_close(csv, "wu2020_fig8.csv");
     free(base);
+    wu_fig4_fig6();
 }
 
 /* ---- Wu 2020 Fig. 9: grid resolution vs time and error --------------------------- */
@@ -366,6 +662,31 @@ static void section_wu_fig9(void)
         fflush(md);
     }
     csv_close(csv, "wu2020_fig9.csv");
+
+    /* Wu 2020 Fig. 7: the three interpolants at 8^3, images and the central scanline */
+    fprintf(md, "\n## Wu et al. 2020, Fig. 7: three interpolants on the 8^3 grid\n\n"
+                "The same scene and reference; float nodes.  Image: wu2020_fig7.png (reference, each interpolant and\n"
+                "10x its error, and a scanline).\n\n"
+                "| interpolant | MAE x1e-3 (sRGB) | rel. MAE | largest difference (8-bit levels) |\n|---|---|---|---|\n");
+    const int interps[3] = {SHL_INTERP_HERMITE, SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR};
+    const char *inames[3] = {"hermite", "trilinear", "taylor"}, *labels[4] = {"reference", "hermite", "trilinear", "taylor"};
+    float *imgs[3];
+    write_panel("wu2020_fig7", "reference", &p, ref, exposure);
+    for (int k = 0; k < 3; ++k) {
+        const lighting_method m = grid(s.lmax, 8, interps[k]);
+        imgs[k] = xmalloc(sizeof(float) * img_len(&s));
+        render(&p, &m, NULL, 0, imgs[k], 1);
+        const image_error e = image_compare(s.width, s.height, imgs[k], ref, p.mask, exposure);
+        fprintf(md, "| %s | %.3f | %.2e | %d |\n", inames[k], e.mae_srgb * 1e3, e.mae / e.mean_ref,
+                max_grey_levels(&p, imgs[k], ref, exposure));
+        char name[32];
+        write_panel("wu2020_fig7", inames[k], &p, imgs[k], exposure);
+        snprintf(name, sizeof name, "%s-error", inames[k]);
+        write_error_panel("wu2020_fig7", name, &p, imgs[k], ref, exposure);
+    }
+    const float *all[4] = {ref, imgs[0], imgs[1], imgs[2]};
+    fprintf(md, "\nScanline: image row %d (of %d).\n", scanline_csv("wu2020_fig7.csv", &p, 4, all, labels, exposure), s.height);
+    for (int k = 0; k < 3; ++k) free(imgs[k]);
     free(ref);
     free(img);
     prt_free(&p);
@@ -387,6 +708,74 @@ static const wang_row wang_rows[] = {
     {"wang-face.scene", "Face (Fig. 8)", "98k", 1, 384.6, 150.0},
 };
 
+/* Wang 2018 Fig. 4: the analytic image against numerical integration (Monte Carlo projection of the
+ * same lights onto SH, per vertex), the difference and the central scanline. */
+static void wang_fig4(void)
+{
+    enum { SAMPLES = 16384 };
+    scene s;
+    if (load_scene("sweep-diffuse.scene", NULL, &s)) return;
+    prt p;
+    init_prt(&p, &s);
+    float *a = xmalloc(sizeof(float) * img_len(&s)), *mc = xmalloc(sizeof(float) * img_len(&s));
+    const lighting_method ma = method(LM_ANALYTIC, 8);
+    lighting_method mm = method(LM_MC, 8);
+    mm.mc_samples = SAMPLES;
+    render(&p, &ma, NULL, 0, a, 1);
+    render(&p, &mm, NULL, 0, mc, 1);
+    const double exposure = prt_exposure(&p, a);
+    const image_error e = image_compare(s.width, s.height, mc, a, p.mask, exposure);
+    fprintf(md, "\n## Wang & Ramamoorthi 2018, Fig. 4: analytic vs numerical integration\n\n"
+                "bench/scenes/sweep-diffuse.scene (%d vertices, 3 lights), lmax 8 (81 terms, as the paper's Fig. 4):\n"
+                "per-vertex analytic coefficients against a stratified Monte Carlo projection of the same lights with\n"
+                "%d samples per vertex.  Image: wang2018_fig4.png (both images, 10x their difference, a\n"
+                "scanline).\n\n| | MAE x1e-3 (sRGB) | rel. MAE | largest difference (8-bit levels) | paper |\n|---|---|---|---|---|\n"
+                "| Monte Carlo vs analytic | %.3f | %.2e | %d | at most one grey level |\n",
+            s.geom.nv, SAMPLES, e.mae_srgb * 1e3, e.mae / e.mean_ref, max_grey_levels(&p, mc, a, exposure));
+    write_panel("wang2018_fig4", "analytic", &p, a, exposure);
+    write_panel("wang2018_fig4", "monte-carlo", &p, mc, exposure);
+    write_error_panel("wang2018_fig4", "error", &p, mc, a, exposure);
+    const float *imgs[2] = {a, mc};
+    const char *labels[2] = {"analytic", "monte_carlo"};
+    fprintf(md, "\nScanline: image row %d (of %d).\n", scanline_csv("wang2018_fig4.csv", &p, 2, imgs, labels, exposure), s.height);
+    free(a);
+    free(mc);
+    prt_free(&p);
+    scene_free(&s);
+}
+
+/* Wang 2018 Fig. 5: one shadowed scene at lmax 2, 4, 6, 8 (transfer at the scene's lmax 14),
+ * each image's error against lmax 14. */
+static void wang_fig5(void)
+{
+    scene s;
+    if (load_scene("wang-fig5.scene", NULL, &s)) return;
+    prt p;
+    init_prt(&p, &s);
+    float *ref = xmalloc(sizeof(float) * img_len(&s)), *img = xmalloc(sizeof(float) * img_len(&s));
+    const lighting_method mref = method(LM_ANALYTIC, s.lmax);
+    render(&p, &mref, NULL, 0, ref, 1);
+    const double exposure = prt_exposure(&p, ref);
+    fprintf(md, "\n## Wang & Ramamoorthi 2018, Fig. 5: shadows at SH orders 2, 4, 6, 8\n\n"
+                "bench/scenes/wang-fig5.scene (%d vertices, one rectangular light, shadowed diffuse transfer with %d rays\n"
+                "per vertex at lmax %d), per-vertex analytic lighting truncated to each order.  Error against the\n"
+                "lmax-%d image.  Image: wang2018_fig5.png.\n\n| lmax | MAE x1e-3 (sRGB) | rel. MAE |\n|---|---|---|\n",
+            s.geom.nv, s.shadow_rays, s.lmax, s.lmax);
+    for (int l = 2; l <= 8; l += 2) {
+        const lighting_method m = method(LM_ANALYTIC, l);
+        render(&p, &m, NULL, 0, img, 1);
+        const image_error e = image_compare(s.width, s.height, img, ref, p.mask, exposure);
+        fprintf(md, "| %d | %.3f | %.2e |\n", l, e.mae_srgb * 1e3, e.mae / e.mean_ref);
+        char name[16];
+        snprintf(name, sizeof name, "lmax%d", l);
+        write_panel("wang2018_fig5", name, &p, img, exposure);
+    }
+    free(ref);
+    free(img);
+    prt_free(&p);
+    scene_free(&s);
+}
+
 static void section_wang(void)
 {
     fprintf(md, "\n## Wang & Ramamoorthi 2018, Table 2: frames per second, ZH recurrence vs monomial baseline\n\n"
@@ -396,10 +785,11 @@ static void section_wang(void)
                 "one ZH -> SH reconstruction per colour) and shl_lights_eval_batch_f (float SIMD), the baseline with\n"
                 "the monomial moments of Snyder 1996 / Arvo 1995 (bench/common/monomial.c) in the same structure.\n"
                 "Frame: lighting + shading + visibility raster + resolve (800x600).\n\n"
-                "| scene (stand-in) | triangles | vertices | lights | ours double: lighting ms / frame fps | ours float SIMD: lighting ms / fps | monomial: lighting ms / fps | monomial / ours double (lighting) | paper: ours fps | paper: monomial fps |\n"
-                "|---|---|---|---|---|---|---|---|---|---|\n",
+                "| scene (stand-in) | triangles | vertices | lights | ours double: lighting ms / frame fps | ours float SIMD: lighting ms / fps | monomial: lighting ms / fps | monomial time / ours double time (< 1: monomial faster) | paper: ours fps | paper: monomial fps | paper: ours / monomial fps |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|\n",
             nthreads);
     FILE *csv = NULL;
+    double rmin = INFINITY, rmax = 0.0, pmin = INFINITY, pmax = 0.0;
     for (unsigned r = 0; r < sizeof wang_rows / sizeof wang_rows[0]; ++r) {
         const wang_row *w = &wang_rows[r];
         scene s;
@@ -418,17 +808,38 @@ static void section_wang(void)
             ms[k] = t.lighting * 1e3;
             fps[k] = 1.0 / (t.lighting + t.shade + t.resolve + raster);
         }
-        fprintf(md, "| %s | %d | %d | %d | %.1f / %.2f | %.1f / %.2f | %.1f / %.2f | %.2f | %.1f | %.1f |\n", w->scene, s.geom.nt,
-                s.geom.nv, s.npolys, ms[0], fps[0], ms[1], fps[1], ms[2], fps[2], ms[2] / ms[0], w->fps, w->fps_monomial);
-        fprintf(csv, "%s,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f\n", w->scene, s.geom.nt, s.geom.nv, s.npolys, ms[0],
-                fps[0], ms[1], fps[1], ms[2], fps[2], w->fps, w->fps_monomial);
+        rmin = fmin(rmin, ms[2] / ms[0]);
+        rmax = fmax(rmax, ms[2] / ms[0]);
+        pmin = fmin(pmin, w->fps / w->fps_monomial);
+        pmax = fmax(pmax, w->fps / w->fps_monomial);
+        fprintf(md, "| %s | %d | %d | %d | %.1f / %.2f | %.1f / %.2f | %.1f / %.2f | %.2f | %.1f | %.1f | %.2f |\n", w->scene,
+                s.geom.nt, s.geom.nv, s.npolys, ms[0], fps[0], ms[1], fps[1], ms[2], fps[2], ms[2] / ms[0], w->fps,
+                w->fps_monomial, w->fps / w->fps_monomial);
+        csv_text(csv, w->scene);
+        fprintf(csv, ",%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f\n", s.geom.nt, s.geom.nv, s.npolys, ms[0], fps[0], ms[1],
+                fps[1], ms[2], fps[2], w->fps, w->fps_monomial);
         fflush(md);
         free(img);
         prt_free(&p);
         scene_free(&s);
     }
     csv_close(csv, "wang2018_table2.csv");
-    fprintf(md, "\nPaper: NVIDIA GTX 1080 Ti, vertex shader; \"our algorithm is 2x-4x faster than using the monomial recurrence\".\n");
+    wang_fig4();
+    wang_fig5();
+    fprintf(md, "\nPaper: NVIDIA GTX 1080 Ti, vertex shader; its Table 2 has the ZH recurrence %.1f-%.1fx faster than the\n"
+                "monomial recurrence (its text: \"2x-4x faster\").\n",
+            pmin, pmax);
+    if (rmax > 0.0) {
+        if (rmax < 1.0)
+            fprintf(md, "Here the comparison is REVERSED: the monomial baseline takes %.2f-%.2f of the double ZH path's\n"
+                        "lighting time, i.e. it is %.2f-%.2fx faster (both scalar double, same structure).\n",
+                    rmin, rmax, 1.0 / rmax, 1.0 / rmin);
+        else if (rmin > 1.0)
+            fprintf(md, "Here the ZH recurrence is %.2f-%.2fx faster than the monomial baseline (both scalar double).\n",
+                    rmin, rmax);
+        else
+            fprintf(md, "Here neither is consistently faster: monomial / ZH time %.2f-%.2f (both scalar double).\n", rmin, rmax);
+    }
 }
 
 /* ---- Annen et al. 2004, Table 1 --------------------------------------------------- */
@@ -444,16 +855,114 @@ static const annen_row annen_rows[] = {
     {"annen-tooth.scene", "Tooth", "2.5K", 40.3, 34.5},
 };
 
+/* n <= LIGHTING_MAX_SAMPLES sample points over the object (Annen 2004 Sec. 6 chooses them "over the
+ * object" by Sloan et al.'s method): k-means (Lloyd, 30 iterations) of the receiver vertices, seeded by
+ * the vertices nearest the corners of their bounding box; the samples are the cluster centroids. */
+static void object_samples(const prt *p, int n, double out[][3])
+{
+    const mesh *g = &p->s->geom;
+    int *lab = xmalloc(sizeof(int) * (size_t)g->nv);
+    for (int j = 0; j < n; ++j) {
+        double c[3], best = INFINITY;
+        for (int a = 0; a < 3; ++a) c[a] = (j >> a & 1) ? p->hi[a] : p->lo[a];
+        for (int v = 0; v < g->nv; ++v) {
+            double d = 0.0;
+            for (int a = 0; a < 3; ++a) d += (g->pos[3 * v + a] - c[a]) * (g->pos[3 * v + a] - c[a]);
+            if (d < best) {
+                best = d;
+                memcpy(out[j], g->pos + 3 * v, sizeof(double) * 3);
+            }
+        }
+    }
+    for (int it = 0; it < 30; ++it) {
+        double sum[LIGHTING_MAX_SAMPLES][4] = {{0}};
+        for (int v = 0; v < g->nv; ++v) {
+            double best = INFINITY;
+            for (int j = 0; j < n; ++j) {
+                double d = 0.0;
+                for (int a = 0; a < 3; ++a) d += (g->pos[3 * v + a] - out[j][a]) * (g->pos[3 * v + a] - out[j][a]);
+                if (d < best) {
+                    best = d;
+                    lab[v] = j;
+                }
+            }
+            for (int a = 0; a < 3; ++a) sum[lab[v]][a] += g->pos[3 * v + a];
+            sum[lab[v]][3] += 1.0;
+        }
+        for (int j = 0; j < n; ++j)
+            for (int a = 0; sum[j][3] > 0 && a < 3; ++a) out[j][a] = sum[j][a] / sum[j][3];
+    }
+    free(lab);
+}
+
+/* Annen 2004 Fig. 8: RMS error of the incident radiance (red channel, over all directions:
+ * |c - c_exact| / sqrt(4 pi) by Parseval) extrapolated from one sample at the centre of the
+ * tooth's box, against the distance from it; mean over the 14 axis and diagonal directions.
+ * Our lights do not occlude one another, so only the paper's curve without occlusion changes
+ * (blue emitter removed) has a counterpart: here all three lights, none blocking. */
+static void annen_fig8(void)
+{
+    scene s;
+    if (load_scene("annen-tooth.scene", NULL, &s)) return;
+    const int nc = SHL_NCOEFFS(s.lmax);
+    double lo[3], hi[3], p0[3], c0[3 * SHL_NCOEFFS(8)], g0[9 * SHL_NCOEFFS(8)], c[3 * SHL_NCOEFFS(8)];
+    shl_ctx *ctx;
+    shl_lights *l = scene_light_set(&s);
+    if (s.lmax > 8 || !l) exit(1);
+    must(shl_ctx_create(s.lmax, &ctx), "context");
+    mesh_bounds(&s.geom, lo, hi);
+    for (int a = 0; a < 3; ++a) p0[a] = 0.5 * (lo[a] + hi[a]);
+    must(shl_lights_eval(ctx, l, p0, c0, g0), "sample");
+    double dirs[14][3];
+    for (int k = 0; k < 14; ++k) {
+        const double axis[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        for (int a = 0; a < 3; ++a) dirs[k][a] = k < 6 ? axis[k][a] : (((k - 6) >> a & 1) ? 1 : -1) / sqrt(3.0);
+    }
+    FILE *csv = csv_open("annen2004_fig8.csv", "distance,rms_exact,rms_error_sample,rms_error_gradient");
+    fprintf(md, "\n## Annen et al. 2004, Fig. 8: error of one extrapolated sample vs distance (tooth)\n\n"
+                "bench/scenes/annen-tooth.scene, lmax %d; the sample at the centre of the tooth's box; red channel; RMS\n"
+                "over directions of the incident radiance, mean over 14 directions of travel.  Lights do not occlude\n"
+                "one another here: the counterpart of the paper's curve without occlusion changes.  Plot:\n"
+                "annen2004_fig8.png.\n\n| distance | RMS radiance | RMS error, sample alone | RMS error, sample + gradient |\n"
+                "|---|---|---|---|\n", s.lmax);
+    for (int step = 0; step <= 20; ++step) {
+        const double d = 0.05 * step;
+        double exact = 0.0, e0 = 0.0, e1 = 0.0;
+        for (int k = 0; k < 14; ++k) {
+            double x[3], q = 0.0, r0 = 0.0, r1 = 0.0;
+            for (int a = 0; a < 3; ++a) x[a] = p0[a] + d * dirs[k][a];
+            must(shl_lights_eval(ctx, l, x, c, NULL), "point");
+            for (int i = 0; i < nc; ++i) { /* red: channel 0; Annen Eq. 4 */
+                const double taylor = c0[i] + g0[i] * (x[0] - p0[0]) + g0[nc + i] * (x[1] - p0[1]) + g0[2 * nc + i] * (x[2] - p0[2]);
+                q += c[i] * c[i];
+                r0 += (c0[i] - c[i]) * (c0[i] - c[i]);
+                r1 += (taylor - c[i]) * (taylor - c[i]);
+            }
+            exact += sqrt(q / (4 * M_PI)) / 14;
+            e0 += sqrt(r0 / (4 * M_PI)) / 14;
+            e1 += sqrt(r1 / (4 * M_PI)) / 14;
+        }
+        fprintf(csv, "%.3f,%.6e,%.6e,%.6e\n", d, exact, e0, e1);
+        if (step % 4 == 0) fprintf(md, "| %.2f | %.4g | %.4g | %.4g |\n", d, exact, e0, e1);
+    }
+    csv_close(csv, "annen2004_fig8.csv");
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+    scene_free(&s);
+}
+
 static void section_annen(void)
 {
     fprintf(md, "\n## Annen et al. 2004, Table 1: single sample vs sample + gradient vs eight samples\n\n"
                 "Stand-ins in bench/scenes/annen-*.scene (paper vertex counts; three coloured lights, at mid range\n"
                 "for Planck and Bird, close and overlapping for Tooth as in the paper's Fig. 7).  lmax 4,\n"
                 "%d threads, 512x512, best of 3.  Single sample: coefficients at the centre of the object's bounding\n"
-                "box; + gradient: first-order Taylor extrapolation (Eq. 14); eight samples: a 2^3 grid at the box\n"
-                "corners, trilinear (no gradients), inverse-distance-weighted Taylor (Eq. 15-16, b = 2) and Hermite\n"
-                "(Wu 2020).  Frame: lighting (incl. sampling) + shading + visibility raster + resolve.  Error vs the\n"
-                "per-vertex analytic image.\n\n"
+                "box (Annen Fig. 6: \"at center of the bird\"); + gradient: first-order Taylor extrapolation (Eq. 4).\n"
+                "Eight samples over the object (Annen Sec. 6, Fig. 7 d-f): k-means centroids of the object's\n"
+                "vertices, blended by inverse-distance weights (Eq. 16, b = 2) without gradients (Fig. 7 e) and with\n"
+                "them (Eq. 15, Fig. 7 f).  For comparison, Wu 2020's placement - a 2^3 grid at the corners of the\n"
+                "object's box - with trilinear, Taylor (Eq. 15-16, b = 2) and Hermite interpolation.  Frame: lighting\n"
+                "(incl. sampling) + shading + visibility raster + resolve.  Error vs the per-vertex analytic image.\n\n"
                 "| model (stand-in) | vertices | method | frame ms | fps | MAE x1e-3 (sRGB) | rel. MAE | paper fps |\n"
                 "|---|---|---|---|---|---|---|---|\n",
             nthreads);
@@ -470,13 +979,20 @@ static void section_annen(void)
         lighting_method mref = method(LM_ANALYTIC, s.lmax);
         render(&p, &mref, NULL, 0, ref, 1);
         const double exposure = prt_exposure(&p, ref);
-        lighting_method m[5] = {method(LM_SINGLE, s.lmax), method(LM_TAYLOR1, s.lmax), grid(s.lmax, 2, SHL_INTERP_TRILINEAR),
-                                grid(s.lmax, 2, SHL_INTERP_TAYLOR), grid(s.lmax, 2, SHL_INTERP_HERMITE)};
-        const char *names[5] = {"single sample", "single sample + gradient", "8 samples, trilinear",
-                                "8 samples + gradients (Taylor, b = 2)", "8 samples + gradients (Hermite)"};
-        const double paper[5] = {w->fps_single, w->fps_gradient, NAN, NAN, NAN};
-        for (int k = 0; k < 5; ++k) {
-            for (int a = 0; a < 3; ++a) m[k].point[a] = 0.5 * (p.lo[a] + p.hi[a]);
+        enum { NM = 7 };
+        lighting_method m[NM] = {method(LM_SINGLE, s.lmax), method(LM_TAYLOR1, s.lmax), method(LM_SINGLE, s.lmax),
+                                 method(LM_TAYLOR1, s.lmax), grid(s.lmax, 2, SHL_INTERP_TRILINEAR),
+                                 grid(s.lmax, 2, SHL_INTERP_TAYLOR), grid(s.lmax, 2, SHL_INTERP_HERMITE)};
+        const char *names[NM] = {"single sample", "single sample + gradient", "8 samples over the object (Eq. 16)",
+                                 "8 samples over the object + gradients (Eq. 15-16)", "2^3 grid at the box corners, trilinear",
+                                 "2^3 grid at the box corners + gradients, Taylor (Eq. 15-16)",
+                                 "2^3 grid at the box corners + gradients, Hermite (Wu 2020)"};
+        const double paper[NM] = {w->fps_single, w->fps_gradient, NAN, NAN, NAN, NAN, NAN};
+        for (int a = 0; a < 3; ++a) m[0].point[0][a] = m[1].point[0][a] = 0.5 * (p.lo[a] + p.hi[a]);
+        m[2].npoints = m[3].npoints = 8;
+        object_samples(&p, 8, m[2].point);
+        memcpy(m[3].point, m[2].point, sizeof m[2].point);
+        for (int k = 0; k < NM; ++k) {
             const prt_times t = render(&p, &m[k], NULL, 0, img, 3);
             const image_error e = image_compare(s.width, s.height, img, ref, p.mask, exposure);
             const double frame = t.prepare + t.lighting + t.shade + t.resolve + raster;
@@ -484,8 +1000,11 @@ static void section_annen(void)
             if (!isnan(paper[k])) snprintf(pf, sizeof pf, "%.1f", paper[k]);
             fprintf(md, "| %s (%s) | %d | %s | %.2f | %.0f | %.2f | %.2e | %s |\n", w->model, w->verts, s.geom.nv, names[k],
                     frame * 1e3, 1.0 / frame, e.mae_srgb * 1e3, e.mae / e.mean_ref, pf);
-            fprintf(csv, "%s,%d,%s,%.4f,%.3f,%.5f,%.4e,%s\n", w->model, s.geom.nv, names[k], frame * 1e3, 1.0 / frame,
-                    e.mae_srgb * 1e3, e.mae / e.mean_ref, isnan(paper[k]) ? "" : pf);
+            csv_text(csv, w->model);
+            fprintf(csv, ",%d,", s.geom.nv);
+            csv_text(csv, names[k]);
+            fprintf(csv, ",%.4f,%.3f,%.5f,%.4e,%s\n", frame * 1e3, 1.0 / frame, e.mae_srgb * 1e3, e.mae / e.mean_ref,
+                    isnan(paper[k]) ? "" : pf);
         }
         fflush(md);
         free(ref);
@@ -496,6 +1015,7 @@ static void section_annen(void)
     csv_close(csv, "annen2004_table1.csv");
     fprintf(md, "\nPaper: 3 GHz PC, Quadro FX 3000, 512x512, lighting sampled from 64x64 cube maps (the sampling cost\n"
                 "dominates its frame); it reports fps only - quality shown in Figs. 1, 5, 7.\n");
+    annen_fig8();
 }
 
 /* ---- HVL (Mezieres et al. 2022), Table 1 ------------------------------------------ */
@@ -573,8 +1093,13 @@ static void sweep_row(FILE *csv, const char *scene_name, prt *p, const lighting_
                                                              : "grid Taylor";
     fprintf(md, "| %s | %s | %.2f | %.3f | %.2e | %.2e |\n", family, param, frame * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref,
             e.rmse / e.mean_ref);
-    fprintf(csv, "%s,%s,\"%s\",%.5f,%.5f,%.5f,%.6f,%.5e,%.5e\n", scene_name, family, param, frame * 1e3, (t.prepare + t.lighting) * 1e3,
-            t.shade * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
+    csv_text(csv, scene_name);
+    fputc(',', csv);
+    csv_text(csv, family);
+    fputc(',', csv);
+    csv_text(csv, param);
+    fprintf(csv, ",%.5f,%.5f,%.5f,%.6f,%.5e,%.5e\n", frame * 1e3, (t.prepare + t.lighting) * 1e3, t.shade * 1e3,
+            e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
     fflush(md);
     fflush(csv);
     free(img);
@@ -676,7 +1201,7 @@ int main(int argc, char **argv)
     const double t0 = bench_now();
     fprintf(md, "# The papers' results tables, reproduced with the PRT harness\n\n"
                 "Generated by `make bench-tables` (bench/bench_tables.c; harness in bench/common, scenes in\n"
-                "bench/scenes).  The lead merges this file into bench/RESULTS.md.\n\n");
+                "bench/scenes).  bench/RESULTS.md sets these tables beside the papers' and gives a verdict for each.\n\n");
     bench_print_machine(md);
     char load[64] = "unknown";
     FILE *la = fopen("/proc/loadavg", "r");

@@ -11,6 +11,11 @@ Writes SVG and PNG files:
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
+  wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
+  annen2004_fig8            error of one extrapolated sample vs distance
+  wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12
+                            image panels written by bench_tables (<out>/panels/*.png, from the
+                            same run) in a grid, with the central scanline where its CSV exists
 A CSV that does not exist (its section was not run) is skipped with a note.
 """
 import argparse
@@ -33,11 +38,31 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
-def save(fig, out, name):
-    for ext in ("svg", "png"):
+def save(fig, out, name, exts=("svg", "png")):
+    for ext in exts:
         fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=130, bbox_inches="tight")
     plt.close(fig)
-    print(f"wrote {out}/{name}.svg and .png")
+    print(f"wrote {out}/{name}: {', '.join(exts)}")
+
+
+def short_label(family, parameter):
+    """'lmax 8' -> 'L8', '16^3, lmax 8' -> '16^3', '4096 samples, lmax 8' -> '4096 spp'."""
+    head = parameter.split(",")[0].strip()
+    if head.startswith("lmax "):
+        return "L" + head[5:]
+    if head.endswith(" samples"):
+        return head[:-8] + " spp"
+    return head
+
+
+def pareto(points):
+    """The points no other point beats in both time and error, by increasing time."""
+    front, best = [], float("inf")
+    for x, y in sorted(points):
+        if y < best:
+            front.append((x, y))
+            best = y
+    return front
 
 
 def accuracy_vs_time(rows, out):
@@ -45,22 +70,46 @@ def accuracy_vs_time(rows, out):
     for r in rows:
         scenes.setdefault(r["scene"], OrderedDict()).setdefault(r["method"], []).append(r)
     for scene, methods in scenes.items():
-        fig, ax = plt.subplots(figsize=(7.5, 5))
-        for method, pts in methods.items():
+        fig, ax = plt.subplots(figsize=(8.5, 5.8))
+        allpts, grid_cols = [], OrderedDict()
+        for i, (method, pts) in enumerate(methods.items()):
             x = [float(p["frame_ms"]) for p in pts]
             y = [max(float(p["rel_mae"]), 1e-9) for p in pts]
-            ax.plot(x, y, marker="o", markersize=3.5, label=method)
-            ax.annotate(pts[0]["parameter"].split(",")[0], (x[0], y[0]), fontsize=6, xytext=(3, 3),
-                        textcoords="offset points")
-            ax.annotate(pts[-1]["parameter"].split(",")[0], (x[-1], y[-1]), fontsize=6, xytext=(3, -8),
-                        textcoords="offset points")
+            allpts += list(zip(x, y))
+            ax.plot(x, y, marker="o", markersize=3.5, label=method, color=f"C{i}")
+            if method.startswith("grid"):
+                # the grid curves share their resolutions: one label per resolution, above its points
+                for p, xi, yi in zip(pts, x, y):
+                    grid_cols.setdefault(short_label(method, p["parameter"]), []).append((xi, yi))
+                continue
+            below = method == "analytic float"  # same errors as double at each lmax: label it below
+            for p, xi, yi in zip(pts, x, y):
+                ax.annotate(short_label(method, p["parameter"]), (xi, yi), fontsize=6.5, color=f"C{i}",
+                            xytext=(-3, -9) if below else (3, 3), textcoords="offset points",
+                            ha="right" if below else "left")
+        for label, pts in grid_cols.items():
+            xi = sorted(p[0] for p in pts)[len(pts) // 2]
+            yi = max(p[1] for p in pts)
+            ax.annotate(label, (xi, yi), fontsize=6.5, xytext=(0, 6), textcoords="offset points", ha="center")
+        front = pareto(allpts)
+        ax.plot([p[0] for p in front], [p[1] for p in front], color="black", linewidth=6, alpha=0.15,
+                solid_capstyle="round", label="Pareto front (no point faster and more accurate)", zorder=0)
+        floor = [r for r in rows if r["scene"] == scene and r["method"] == "analytic double"
+                 and r["parameter"] == "lmax 8"]
+        if floor:
+            ax.axhline(float(floor[0]["rel_mae"]), color="grey", linestyle=":", linewidth=1)
+            ax.annotate("lmax 8 truncation error: the floor of the grid and Monte Carlo curves",
+                        (ax.get_xlim()[0], float(floor[0]["rel_mae"])), fontsize=6.5, color="grey",
+                        xytext=(4, -9), textcoords="offset points")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("frame time (ms)")
         ax.set_ylabel("image MAE / mean radiance")
-        ax.set_title(f"What accuracy costs in time: {scene}")
+        ax.set_title(f"What accuracy costs in time: {scene}\n"
+                     "(L = lmax of per-vertex analytic; grid labels = resolution at lmax 8; spp = Monte Carlo samples)",
+                     fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7, loc="upper right")
         save(fig, out, f"accuracy_vs_time_{scene}")
 
 
@@ -104,21 +153,155 @@ def wu_fig9(rows, out):
     save(fig, out, "wu2020_fig9")
 
 
+def wu_fig4(rows, out, tables):
+    """The coefficient along the line, the three interpolants and the 10 samples with their slopes."""
+    x = [float(r["x"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for key, label, style in (("reference", "reference (per point)", dict(color="tab:blue", linewidth=2.5, alpha=0.5)),
+                              ("trilinear", "trilinear", dict(color="tab:red")),
+                              ("taylor_b2", "Taylor (b = 2)", dict(color="tab:cyan")),
+                              ("hermite", "Hermite", dict(color="black", linestyle="--"))):
+        ax.plot(x, [float(r[key]) for r in rows], label=label, linewidth=style.pop("linewidth", 1.2), **style)
+    samples = read_csv(os.path.join(tables, "wu2020_fig4_samples.csv")) or []
+    if samples:
+        sx = [float(p["x"]) for p in samples]
+        sv = [float(p["value"]) for p in samples]
+        ax.plot(sx, sv, "o", color="tab:orange", label="samples (value + gradient)")
+        half = 0.12
+        for xi, vi, di in zip(sx, sv, (float(p["ddx"]) for p in samples)):
+            ax.plot([xi - half, xi + half], [vi - di * half, vi + di * half], color="tab:orange", linewidth=1)
+    ax.set_xlabel("x (y = 0.3, z = 0)")
+    ax.set_ylabel("SH coefficient (7, 2)")
+    ax.set_title("Wu 2020 Fig. 4: interpolating one coefficient from 10 samples", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    save(fig, out, "wu2020_fig4")
+
+
+def wu_fig6(rows, out):
+    """d/dx of two coefficients over the region, analytic and central differences, and their difference."""
+    n = max(int(r["i"]) for r in rows) + 1
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6.4))
+    fig.subplots_adjust(wspace=0.5, hspace=0.3)
+    for q, (key, lm) in enumerate((("6_m3", "(6,-3)"), ("7_2", "(7,2)"))):
+        grids = {k: [[0.0] * n for _ in range(n)] for k in ("analytic", "fd")}
+        for r in rows:
+            i, j = int(r["i"]), int(r["j"])
+            grids["analytic"][n - 1 - j][i] = float(r[f"analytic_{key}"])
+            grids["fd"][n - 1 - j][i] = float(r[f"fd_{key}"])
+        lim = max(abs(v) for row in grids["analytic"] for v in row)
+        diff = [[a - b for a, b in zip(ra, rb)] for ra, rb in zip(grids["analytic"], grids["fd"])]
+        for c, (img, title, vmax) in enumerate(((grids["analytic"], f"d/dx {lm}, analytic", lim),
+                                                (grids["fd"], f"d/dx {lm}, central differences", lim),
+                                                (diff, "analytic - FD", max(abs(v) for row in diff for v in row)))):
+            ax = axes[q][c]
+            im = ax.imshow(img, cmap="RdBu_r", vmin=-vmax, vmax=vmax, extent=(3, 6, 3, 6))
+            ax.set_title(title, fontsize=8)
+            ax.tick_params(labelsize=6)
+            fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).ax.tick_params(labelsize=6)
+    fig.suptitle("Wu 2020 Fig. 6: SH gradients, light (-5,-5,1)-(5,5,1), region (3,3,0)-(6,6,0)", fontsize=10)
+    save(fig, out, "wu2020_fig6", exts=("png",))
+
+
+def annen_fig8(rows, out):
+    d = [float(r["distance"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    ax.plot(d, [float(r["rms_error_gradient"]) for r in rows], marker="o", markersize=3, color="tab:green",
+            label="sample + gradient (Eq. 4)")
+    ax.plot(d, [float(r["rms_error_sample"]) for r in rows], marker="s", markersize=3, color="tab:gray",
+            label="sample alone")
+    ax.plot(d, [float(r["rms_exact"]) for r in rows], linestyle=":", color="black", label="RMS of the radiance itself")
+    ax.set_xlabel("distance from the sample (scene units; the tooth is 1.2 wide, 1.56 tall)")
+    ax.set_ylabel("RMS error of incident radiance (red)")
+    ax.set_title("Annen 2004 Fig. 8: one extrapolated sample, tooth (no occluding emitter)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, out, "annen2004_fig8")
+
+
 def hvl_table1(rows, out):
+    """Ours (CPU) and the paper's (GPU) times on separate axes, then both normalized to their
+    own 3-band time at the fewest HVLs: only the shape (growth with HVLs and bands) compares."""
     bands = OrderedDict()
     for r in rows:
         bands.setdefault(r["bands"], []).append(r)
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for b, pts in bands.items():
-        ax.plot([int(p["hvls"]) for p in pts], [float(p["ms"]) for p in pts], marker="o", label=f"{b} bands (ours)")
-        ax.plot([int(p["hvls_requested"]) for p in pts], [float(p["paper_ms"]) for p in pts], linestyle="--",
-                marker="x", label=f"{b} bands (paper, GPU)")
-    ax.set_xlabel("HVLs")
-    ax.set_ylabel("gathering time (ms)")
-    ax.set_title("HVL Table 1: gathering time")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    fig, (ax_ours, ax_paper, ax_norm) = plt.subplots(1, 3, figsize=(13, 4.2))
+    base = OrderedDict()
+    for i, (b, pts) in enumerate(bands.items()):
+        base.setdefault("ours", float(pts[0]["ms"]))
+        base.setdefault("paper", float(pts[0]["paper_ms"]))
+        n_ours = [int(p["hvls"]) for p in pts]
+        n_paper = [int(p["hvls_requested"]) for p in pts]
+        ours = [float(p["ms"]) for p in pts]
+        paper = [float(p["paper_ms"]) for p in pts]
+        ax_ours.plot(n_ours, ours, marker="o", color=f"C{i}", label=f"{b} bands")
+        ax_paper.plot(n_paper, paper, marker="x", linestyle="--", color=f"C{i}", label=f"{b} bands")
+        ax_norm.plot(n_ours, [v / base["ours"] for v in ours], marker="o", color=f"C{i}", label=f"{b} bands, ours")
+        ax_norm.plot(n_paper, [v / base["paper"] for v in paper], marker="x", linestyle="--", color=f"C{i}",
+                     label=f"{b} bands, paper")
+    ax_ours.set_title("ours: CPU, 2 threads", fontsize=9)
+    ax_ours.set_ylabel("gathering time (ms)")
+    ax_paper.set_title("paper: RTX 2080 GPU (its Table 1)", fontsize=9)
+    ax_paper.set_ylabel("gathering time (ms)")
+    ax_norm.set_title("both / own 3-band time at the fewest HVLs", fontsize=9)
+    ax_norm.set_ylabel("relative time")
+    for ax in (ax_ours, ax_paper, ax_norm):
+        ax.set_xlabel("HVLs")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6.5, ncol=2 if ax is ax_norm else 1)
+    fig.suptitle("HVL Table 1: indirect-light gathering time (different hardware: compare shapes, not ms)",
+                 fontsize=10)
     save(fig, out, "hvl2022_table1")
+
+
+# Figures composed of the panels bench_tables writes: (panel file suffixes, titles) per row.
+PANEL_FIGURES = {
+    "wang2018_fig4": ("Wang 2018 Fig. 4: analytic vs Monte Carlo projection (lmax 8)",
+                      [[("analytic", "analytic"), ("monte-carlo", "Monte Carlo, 16384 samples"),
+                        ("error", "10 x |difference|")]], "wang2018_fig4.csv"),
+    "wang2018_fig5": ("Wang 2018 Fig. 5: shadows at SH orders 2, 4, 6, 8",
+                      [[("lmax2", "lmax 2"), ("lmax4", "lmax 4"), ("lmax6", "lmax 6"), ("lmax8", "lmax 8")]], None),
+    "wu2020_fig7": ("Wu 2020 Fig. 7: interpolants on an 8^3 grid",
+                    [[("reference", "per-vertex reference"), ("hermite", "Hermite"), ("trilinear", "trilinear"),
+                      ("taylor", "Taylor")],
+                     [None, ("hermite-error", "10 x error"), ("trilinear-error", "10 x error"),
+                      ("taylor-error", "10 x error")]], "wu2020_fig7.csv"),
+    "wu2020_fig12": ("Wu 2020 Fig. 12: a two-sided light inside the grid's box",
+                     [[("reference", "per-vertex reference"), ("grid8", "8^3 Hermite"), ("grid32", "32^3 Hermite")],
+                      [None, ("grid8-error", "10 x error"), ("grid32-error", "10 x error")]], None),
+}
+
+
+def panel_figure(name, tables, out):
+    title, rows, scan = PANEL_FIGURES[name]
+    panels = os.path.join(out, "panels")
+    files = [[os.path.join(panels, f"{name}-{c[0]}.png") if c else None for c in row] for row in rows]
+    if not all(os.path.exists(f) for row in files for f in row if f):
+        print(f"plot.py: panels of {name} not found in {panels}, skipped", file=sys.stderr)
+        return
+    scan_rows = read_csv(os.path.join(tables, scan)) if scan else None
+    ncol, nrow = max(len(r) for r in rows), len(rows) + (1 if scan_rows else 0)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.6 * nrow), squeeze=False)
+    for r, row in enumerate(rows):
+        for c in range(ncol):
+            ax = axes[r][c]
+            ax.axis("off")
+            if c < len(row) and row[c]:
+                ax.imshow(plt.imread(files[r][c]))
+                ax.set_title(row[c][1], fontsize=8)
+    if scan_rows:
+        for c in range(ncol):
+            axes[-1][c].remove()
+        ax = fig.add_subplot(nrow, 1, nrow)
+        x = [int(p["x"]) for p in scan_rows]
+        for key in [k for k in scan_rows[0] if k not in ("x", "receiver")]:
+            ax.plot(x, [float(p[key]) for p in scan_rows], linewidth=1, label=key.replace("_", " "))
+        ax.set_xlabel("pixel along the scanline (the middle row of the receivers)")
+        ax.set_ylabel("luminance x exposure")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    save(fig, out, name, exts=("png",))  # raster panels: an SVG would only embed them
 
 
 def main():
@@ -132,6 +315,17 @@ def main():
         rows = read_csv(os.path.join(args.tables, name))
         if rows:
             fn(rows, args.out)
+    rows = read_csv(os.path.join(args.tables, "wu2020_fig4.csv"))
+    if rows:
+        wu_fig4(rows, args.out, args.tables)
+    rows = read_csv(os.path.join(args.tables, "annen2004_fig8.csv"))
+    if rows:
+        annen_fig8(rows, args.out)
+    rows = read_csv(os.path.join(args.tables, "wu2020_fig6.csv"))
+    if rows:
+        wu_fig6(rows, args.out)
+    for name in PANEL_FIGURES:
+        panel_figure(name, args.tables, args.out)
 
 
 if __name__ == "__main__":

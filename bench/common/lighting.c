@@ -15,7 +15,8 @@ struct lighting {
     shl_ctx *ctx;
     shl_lights *set;
     shl_grid *grid;
-    double *sample, *sample_grad; /* SINGLE / TAYLOR1: 3 nc and 9 nc */
+    double *sample;               /* SINGLE / TAYLOR1: per sample 3 nc values, then 9 nc gradients */
+    int nsamples;
     double (*normal)[3];          /* per polygon: unit normal (one-sided: the emitting side) */
     double *area;                 /* per polygon */
     double *cdf;                  /* MC light selection: polygons, then spheres */
@@ -113,10 +114,14 @@ lighting *lighting_prepare(const scene *s, const lighting_method *m, const doubl
             shl_grid_fill(L->grid, L->set, nthreads) != SHL_OK)
             goto fail;
     } else if (m->kind == LM_SINGLE || m->kind == LM_TAYLOR1) {
-        L->sample = calloc(12 * (size_t)L->nc, sizeof(double));
+        L->nsamples = m->npoints > 1 ? m->npoints : 1;
+        if (L->nsamples > LIGHTING_MAX_SAMPLES) goto fail;
+        L->sample = calloc(12 * (size_t)L->nc * (size_t)L->nsamples, sizeof(double));
         if (!L->sample) goto fail;
-        L->sample_grad = L->sample + 3 * L->nc;
-        if (shl_lights_eval(L->ctx, L->set, m->point, L->sample, L->sample_grad) != SHL_OK) goto fail;
+        for (int j = 0; j < L->nsamples; ++j) {
+            double *c = L->sample + 12 * (size_t)L->nc * (size_t)j;
+            if (shl_lights_eval(L->ctx, L->set, m->point[j], c, c + 3 * L->nc) != SHL_OK) goto fail;
+        }
     } else if (m->kind == LM_MONOMIAL) {
         /* the baseline fills its Legendre table on first use: do it before any thread runs */
         shl__poly_geom g;
@@ -281,14 +286,32 @@ static void eval_block(void *arg, long begin, long end, int worker)
         break;
     case LM_SINGLE:
     case LM_TAYLOR1:
-        for (int p = 0; p < nb; ++p)
-            for (int ch = 0; ch < 3; ++ch)
-                for (int k = 0; k < nc; ++k) {
-                    double v = L->sample[ch * nc + k];
-                    for (int a = 0; L->m.kind == LM_TAYLOR1 && a < 3; ++a)
-                        v += L->sample_grad[(ch * 3 + a) * nc + k] * (pts[3 * p + a] - L->m.point[a]);
-                    out[(3 * (size_t)p + ch) * nc + k] = v;
-                }
+        for (int p = 0; p < nb; ++p) {
+            const double *x = pts + 3 * p;
+            double w[LIGHTING_MAX_SAMPLES], wsum = 0.0;
+            int at = -1; /* a vertex on (or within overflow of) a sample takes it alone: the limit of Eq. 16 */
+            for (int j = 0; j < L->nsamples; ++j) {
+                double d[3];
+                v3_sub(d, x, L->m.point[j]);
+                const double r = v3_len(d);
+                w[j] = L->nsamples == 1 ? 1.0 : pow(r, -L->m.taylor_b); /* Annen Eq. 16 */
+                if (!isfinite(w[j])) at = j;
+                else wsum += w[j];
+            }
+            for (int j = 0; j < L->nsamples; ++j) w[j] = at >= 0 ? (j == at) : w[j] / wsum;
+            for (int k = 0; k < 3 * nc; ++k) out[3 * (size_t)nc * p + k] = 0.0;
+            for (int j = 0; j < L->nsamples; ++j) {
+                if (w[j] == 0.0) continue;
+                const double *c = L->sample + 12 * (size_t)nc * (size_t)j, *g = c + 3 * nc;
+                for (int ch = 0; ch < 3; ++ch)
+                    for (int k = 0; k < nc; ++k) {
+                        double v = c[ch * nc + k]; /* Annen Eq. 4 / 15: c_j + grad c_j . d_j */
+                        for (int a = 0; L->m.kind == LM_TAYLOR1 && a < 3; ++a)
+                            v += g[(ch * 3 + a) * nc + k] * (x[a] - L->m.point[j][a]);
+                        out[(3 * (size_t)p + ch) * nc + k] += w[j] * v;
+                    }
+            }
+        }
         break;
     }
     if (L->m.kind != LM_ANALYTIC_F)

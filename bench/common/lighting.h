@@ -9,12 +9,16 @@
  *  - MONOMIAL:   the monomial-moment baseline (bench/common/monomial.h) per polygon,
  *                spheres by shl_sphere;
  *  - SINGLE / TAYLOR1: one sample at a point, constant or extrapolated with its gradient
- *                (Annen 2004 Eq. 14). */
+ *                (Annen 2004 Eq. 4); with npoints > 1 samples, their values (SINGLE) or
+ *                first-order extrapolations (TAYLOR1) blended by inverse-distance weights
+ *                (Annen 2004 Eq. 15-16, exponent taylor_b). */
 #ifndef SHL_BENCH_LIGHTING_H
 #define SHL_BENCH_LIGHTING_H
 
 #include "scene.h"
 #include <stddef.h>
+
+#define LIGHTING_MAX_SAMPLES 8
 
 typedef enum { LM_ANALYTIC, LM_ANALYTIC_F, LM_GRID, LM_MC, LM_MONOMIAL, LM_SINGLE, LM_TAYLOR1 } lighting_kind;
 
@@ -22,9 +26,10 @@ typedef struct {
     lighting_kind kind;
     int lmax;
     int grid_res, interp, grid_storage; /* GRID: resolution, SHL_INTERP_*, SHL_GRID_FLOAT / DOUBLE */
-    double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR */
+    double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR; SINGLE / TAYLOR1 with npoints > 1 */
     long mc_samples;                    /* MC */
-    double point[3];                    /* SINGLE, TAYLOR1: where the sample is taken */
+    int npoints;                        /* SINGLE, TAYLOR1: number of samples (0 means 1) */
+    double point[LIGHTING_MAX_SAMPLES][3]; /* SINGLE, TAYLOR1: where the samples are taken */
 } lighting_method;
 
 typedef struct lighting lighting;
