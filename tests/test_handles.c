@@ -104,10 +104,14 @@ SHL_TEST(handles_brdf_table_create_null_on_failure)
         const shl_brdf *brdf;
         int ntheta, want;
     } bad[] = {
-        {4, NULL, 90, SHL_ENULL},           {-1, &ok, 90, SHL_ELMAX},
-        {SHL_LMAX_MAX + 1, &ok, 90, SHL_ELMAX}, {4, &ok, 1, SHL_EDOMAIN},
-        {4, &ok, 1025, SHL_EDOMAIN},        {4, &bad_model, 90, SHL_EDOMAIN},
-        {4, &bad_kd, 90, SHL_EDOMAIN},      {4, &nan_exp, 90, SHL_ENONFINITE},
+        {4, NULL, 90, SHL_ENULL},
+        {-1, &ok, 90, SHL_ELMAX},
+        {SHL_LMAX_MAX + 1, &ok, 90, SHL_ELMAX},
+        {4, &ok, 1, SHL_EDOMAIN},
+        {4, &ok, 1025, SHL_EDOMAIN},
+        {4, &bad_model, 90, SHL_EDOMAIN},
+        {4, &bad_kd, 90, SHL_EDOMAIN},
+        {4, &nan_exp, 90, SHL_ENONFINITE},
         {4, &bad_alpha, 90, SHL_EDOMAIN},
     };
     shl_brdf_table *t;

@@ -23,8 +23,9 @@
 # -std=c11 -Wall -Wextra -Wpedantic -Werror (extra check, not a README command).
 # Usage: tools/check_readme.sh [MARKDOWN]   (default README.md)
 set -euo pipefail
+md=README.md
+[ $# -eq 0 ] || md=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 cd "$(dirname "$0")/.."
-md=${1:-README.md}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 repo=$tmp/shlight
@@ -33,7 +34,7 @@ mkdir -p "$repo" "$tmp/home" "$tmp/blocks"
 # Parse: C blocks into $tmp/blocks/NAME, run blocks into $tmp/session.sh.
 awk -v blocks="$tmp/blocks" -v session="$tmp/session.sh" -v md="$md" '
 function fail(msg) { printf "%s:%d: %s\n", md, NR, msg > "/dev/stderr"; bad = 1 }
-BEGIN { nrun = 0; nfile = 0 }
+BEGIN { nrun = 0 }
 mode == "c" && /^```[[:space:]]*$/ { mode = ""; close(out); next }
 mode == "c" { print > out; next }
 mode == "sh" && /^```[[:space:]]*$/ {
@@ -48,7 +49,7 @@ mode == "sh" { print > session; next }
 /^```c[[:space:]]*$/ {
     if (marker != "file") { fail("```c block without a <!-- file: NAME.c|NAME.h --> marker on the line before"); mode = "c"; out = "/dev/null"; next }
     if (name in seen) fail("file name " name " used twice")
-    seen[name] = 1; ++nfile
+    seen[name] = 1
     mode = "c"; out = blocks "/" name; printf "" > out; next
 }
 /^```sh[[:space:]]*$/ && marker == "run" {
