@@ -254,7 +254,7 @@ oracle-check: venv $(SHARED) $(BUILD)/bench/oracle_export
 help:
 	@echo 'shlight targets (typical time on 2 cores, make -j2; details in README.md):'
 	@printf '  %-13s %-66s %s\n' all 'build/libshlight.a and build/libshlight.so (the default target)' '~15 s'
-	@printf '  %-13s %-66s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '~3 min'
+	@printf '  %-13s %-66s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
 	@printf '  %-13s %-66s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
 	@printf '  %-13s %-66s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
 	@printf '  %-13s %-66s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
