@@ -1,4 +1,4 @@
-# shlight -- see README.md.  Targets: all (libraries), test, demo, bench, install, lobes, clean.
+# shlight -- see README.md.  `make help` lists every target with its typical run time.
 CC       ?= cc
 BUILD    ?= build
 PREFIX   ?= /usr/local
@@ -152,6 +152,12 @@ install: all
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|0.1.0|g' tools/shlight.pc.in \
 	  > $(DESTDIR)$(PREFIX)/lib/pkgconfig/shlight.pc
 
+# Removes exactly the four files install wrote (same PREFIX and DESTDIR); directories stay.
+.PHONY: uninstall
+uninstall:
+	rm -f $(DESTDIR)$(PREFIX)/include/shlight.h $(DESTDIR)$(PREFIX)/lib/libshlight.a \
+	  $(DESTDIR)$(PREFIX)/lib/libshlight.so $(DESTDIR)$(PREFIX)/lib/pkgconfig/shlight.pc
+
 clean:
 	rm -rf $(BUILD)
 
@@ -266,3 +272,35 @@ oracle-check: oracle-llvm
 
 plots: venv-plot
 	$(VENV_PLOT)/bin/python tools/plot.py
+
+# ---- make help: every target, one line each, with its typical time on the 2-core CI machine
+# (make -j2 from a clean tree; a build step already done is not paid again).
+.PHONY: help
+help:
+	@echo 'shlight targets (typical time on 2 cores, make -j2; details in README.md):'
+	@printf '  %-13s %-66s %s\n' all 'build/libshlight.a and build/libshlight.so (the default target)' '~15 s'
+	@printf '  %-13s %-66s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
+	@printf '  %-13s %-66s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
+	@printf '  %-13s %-66s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
+	@printf '  %-13s %-66s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
+	@printf '  %-13s %-66s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
+	@printf '  %-13s %-66s %s\n' bench-tables 'the papers'\'' results tables (bench_tables; needs the meshes)' '~12 min'
+	@printf '  %-13s %-66s %s\n' install 'all + header, both libraries, shlight.pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
+	@printf '  %-13s %-66s %s\n' uninstall 'remove exactly those four files (same PREFIX and DESTDIR)' '<1 s'
+	@printf '  %-13s %-66s %s\n' lobes 'regenerate src/zh_tables.c with tools/gen_lobes' '1-2.5 min'
+	@printf '  %-13s %-66s %s\n' clean 'remove $$(BUILD)' '<1 s'
+	@printf '  %-13s %-66s %s\n' fuzz 'libFuzzer targets x FUZZ_SECONDS (60) each, ASan + UBSan' '~1 min build + 8 min'
+	@printf '  %-13s %-66s %s\n' fuzz-build 'build the fuzz binaries with clang into $$(BUILD)/fuzz/' '~1 min'
+	@printf '  %-13s %-66s %s\n' fuzz-bins '(inside fuzz-build) the fuzz binaries for the current CC' '~1 min'
+	@printf '  %-13s %-66s %s\n' fuzz-repro 'replay the open-bug reproducers tests/fuzz/crashes/*' 'fuzz-build + seconds'
+	@printf '  %-13s %-66s %s\n' stress 'STRESS_N (1e7) random and near-degenerate cases, 2 threads' '~7 min'
+	@printf '  %-13s %-66s %s\n' venv 'build/venv from tools/requirements.txt (Mitsuba, Dr.Jit)' 'minutes (download); then <1 s'
+	@printf '  %-13s %-66s %s\n' venv-plot 'build/venv-plot: numpy + matplotlib (tools/requirements-plot.txt)' '~1-3 min (download); then <1 s'
+	@printf '  %-13s %-66s %s\n' plots 'redraw bench/plots/ with tools/plot.py (venv-plot)' '~1 min'
+	@printf '  %-13s %-66s %s\n' oracle-llvm 'find a libLLVM >= 17 for Dr.Jit, or say which package to install' '<1 s'
+	@printf '  %-13s %-66s %s\n' oracle 'full Mitsuba 3 / Dr.Jit comparison, writes bench/ORACLE.md' '39 min'
+	@printf '  %-13s %-66s %s\n' oracle-check 'the CI subset of the oracle (20 configurations, one image)' '4 min'
+	@printf '  %-13s %-66s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
+	@printf '  %-13s %-66s %s\n' help 'this list' 'instant'
+	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, PREFIX (/usr/local), DESTDIR,'
+	@echo '  TEST_FILTER, FUZZ_SECONDS, FUZZ_TARGETS, STRESS_N, STRESS_THREADS.'

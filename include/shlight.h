@@ -8,7 +8,11 @@
  *  - "lmax" is the highest band; a vector of bands 0..lmax has
  *    SHL_NCOEFFS(lmax) = (lmax+1)^2 entries.
  *  - Every function returns an int status: SHL_OK (0) or a negative SHL_E*
- *    code (shl_strerror() names it).  On error no output is written.
+ *    code (shl_strerror() names it).  On error no output is written, with one
+ *    deliberate exception: the *_create functions (shl_ctx_create,
+ *    shl_lights_create, shl_grid_create, shl_brdf_table_create) set *out = NULL
+ *    on every failure when out itself is non-NULL (bad arguments, SHL_ENOMEM),
+ *    so cleanup code may call the matching *_destroy on it unconditionally.
  *    The library never prints, never aborts, never calls exit().
  *  - Gradients use the layout grad[a*nc + k] = d coeffs[k] / d x[a],
  *    a = 0,1,2 (x, y, z), nc = SHL_NCOEFFS(lmax).
@@ -46,7 +50,8 @@ const char *shl_strerror(int status);
 /** Opaque evaluation context: immutable after creation, share freely across threads. */
 typedef struct shl_ctx shl_ctx;
 
-/** Create a context for bands 0..lmax (0 <= lmax <= SHL_LMAX_MAX). */
+/** Create a context for bands 0..lmax (0 <= lmax <= SHL_LMAX_MAX).
+ *  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create(int lmax, shl_ctx **out);
 /** Destroy a context (NULL is accepted and ignored). */
 void shl_ctx_destroy(shl_ctx *ctx);
@@ -100,7 +105,7 @@ int shl_polygon_solid_angle(const double x[3], const double *verts, int n, doubl
  */
 typedef struct shl_lights shl_lights;
 
-/** Create an empty light set. */
+/** Create an empty light set.  On failure *out = NULL (if out != NULL). */
 int shl_lights_create(shl_lights **out);
 /** Destroy a light set (NULL is accepted and ignored). */
 void shl_lights_destroy(shl_lights *lights);
@@ -169,6 +174,7 @@ int shl_grid_bytes_per_node(int lmax, int storage, int *bytes);
  * Create a zero-filled grid for bands 0..shl_ctx_lmax(ctx).  Needs lo[a] < hi[a]
  * (finite) and 2 <= res[a] <= SHL_GRID_RES_MAX, storage SHL_GRID_FLOAT or
  * SHL_GRID_DOUBLE (else SHL_EDOMAIN).  Memory: nodes x shl_grid_bytes_per_node.
+ * On failure *out = NULL (if out != NULL).
  */
 int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3],
                     int storage, shl_grid **out);
@@ -454,6 +460,7 @@ typedef struct shl_brdf_table shl_brdf_table;
  * isotropic BRDF the m < 0 coefficients are 0.  Quadrature in a frame about the
  * mirror direction (Gauss-Legendre panels graded towards the lobe, horizon
  * clipped exactly), then an SH rotation.  Stores 16 ntheta (lmax+1)^2 bytes.
+ * On failure *out = NULL (if out != NULL).
  */
 int shl_brdf_table_create(int lmax, const shl_brdf *brdf, int ntheta, shl_brdf_table **out);
 /** Destroy a table (NULL is accepted and ignored). */

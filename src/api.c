@@ -36,6 +36,7 @@ int shl__check_finite_f(const float *v, int count)
 int shl_ctx_create(int lmax, shl_ctx **out)
 {
     if (!out) return SHL_ENULL;
+    *out = NULL; /* on every failure below (the exception in shlight.h) */
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
     shl_ctx *ctx = shl__calloc(1, sizeof *ctx);
     if (!ctx) return SHL_ENOMEM;

@@ -182,7 +182,9 @@ static void project(projector *pj, double theta_o, double *f_cos, double *f)
 
 int shl_brdf_table_create(int lmax, const shl_brdf *brdf, int ntheta, shl_brdf_table **out)
 {
-    if (!brdf || !out) return SHL_ENULL;
+    if (!out) return SHL_ENULL;
+    *out = NULL; /* on every failure below (the exception in shlight.h) */
+    if (!brdf) return SHL_ENULL;
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
     const int st = check_brdf(brdf);
     if (st) return st;

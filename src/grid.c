@@ -21,7 +21,9 @@ int shl_grid_bytes_per_node(int lmax, int storage, int *bytes)
 int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3],
                     int storage, shl_grid **out)
 {
-    if (!ctx || !lo || !hi || !res || !out) return SHL_ENULL;
+    if (!out) return SHL_ENULL;
+    *out = NULL; /* on every failure below (the exception in shlight.h) */
+    if (!ctx || !lo || !hi || !res) return SHL_ENULL;
     if (storage != SHL_GRID_FLOAT && storage != SHL_GRID_DOUBLE) return SHL_EDOMAIN;
     if (shl__check_finite(lo, 3) || shl__check_finite(hi, 3)) return SHL_ENONFINITE;
     size_t nnodes = 1;

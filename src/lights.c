@@ -149,6 +149,7 @@ void shl__lights_eval(const shl_lights *lights, int lmax, double *ws, const doub
 int shl_lights_create(shl_lights **out)
 {
     if (!out) return SHL_ENULL;
+    *out = NULL; /* on failure (the exception in shlight.h) */
     shl_lights *l = shl__calloc(1, sizeof *l);
     if (!l) return SHL_ENOMEM;
     *out = l;

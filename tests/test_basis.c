@@ -141,13 +141,15 @@ SHL_TEST(basis_ctx_create_bad_input_and_alloc_failure)
 {
     shl_ctx *sentinel = (shl_ctx *)&sentinel, *ctx = sentinel;
     CHECK(shl_ctx_create(4, NULL) == SHL_ENULL);
-    CHECK(shl_ctx_create(-1, &ctx) == SHL_ELMAX && ctx == sentinel);
-    CHECK(shl_ctx_create(SHL_LMAX_MAX + 1, &ctx) == SHL_ELMAX && ctx == sentinel);
+    CHECK(shl_ctx_create(-1, &ctx) == SHL_ELMAX && ctx == NULL); /* *out = NULL on failure */
+    ctx = sentinel;
+    CHECK(shl_ctx_create(SHL_LMAX_MAX + 1, &ctx) == SHL_ELMAX && ctx == NULL);
+    ctx = sentinel;
     shl__alloc_fail_after = 0;
     const int st = shl_ctx_create(4, &ctx);
     shl__alloc_fail_after = -1;
-    CHECK(st == SHL_ENOMEM && ctx == sentinel);
-    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK && ctx != sentinel);
+    CHECK(st == SHL_ENOMEM && ctx == NULL);
+    CHECK(shl_ctx_create(SHL_LMAX_MAX, &ctx) == SHL_OK && ctx != NULL);
     CHECK(shl_ctx_lmax(ctx) == SHL_LMAX_MAX && shl_ctx_lmax(NULL) == SHL_ENULL);
     shl_ctx_destroy(ctx);
     shl_ctx_destroy(NULL);

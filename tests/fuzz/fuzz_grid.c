@@ -183,16 +183,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     shl_grid *grid = (shl_grid *)&in;
     if (allocs && want == SHL_OK) {
         for (long f = 0; f < 2; ++f) {
+            grid = (shl_grid *)&in;
             shl__alloc_fail_after = f;
             const int st = shl_grid_create(ctx, lo, hi, res, storage, &grid);
             shl__alloc_fail_after = -1;
-            FUZZ_CHECK(st == SHL_ENOMEM && grid == (shl_grid *)&in, "create under ENOMEM (%ld): %d", f, st);
+            FUZZ_CHECK(st == SHL_ENOMEM && grid == NULL, "create under ENOMEM (%ld): %d", f, st);
         }
     }
+    grid = (shl_grid *)&in;
     const int st = shl_grid_create(ctx, lo, hi, res, storage, &grid);
     FUZZ_CHECK(st == want, "create %d, want %d", st, want);
     if (st != SHL_OK) {
-        FUZZ_CHECK(grid == (shl_grid *)&in, "grid written on error");
+        FUZZ_CHECK(grid == NULL, "*out not set to NULL on error");
         return 0;
     }
     const int nn = node_count(res);

@@ -96,7 +96,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (allocs) {
         shl__alloc_fail_after = 0;
         shl_lights *tmp = (shl_lights *)&in;
-        FUZZ_CHECK(shl_lights_create(&tmp) == SHL_ENOMEM && tmp == (shl_lights *)&in, "create: ENOMEM expected");
+        FUZZ_CHECK(shl_lights_create(&tmp) == SHL_ENOMEM && tmp == NULL, "create: ENOMEM and *out = NULL expected");
         shl__alloc_fail_after = -1;
     }
     FUZZ_CHECK(shl_lights_create(&set) == SHL_OK && set, "create");
