@@ -124,12 +124,24 @@ bench: $(BENCH_BIN)
 demo: $(BUILD)/bench/demo
 	$(BUILD)/bench/demo
 
-# The papers' results tables with the PRT harness (about 12 minutes on 2 cores):
-# bench/RESULTS-tables.md and bench/tables/*.csv; tools/plot.py draws bench/plots/.
-.PHONY: bench-tables
+# The papers' results tables with the PRT harness (about 4 minutes on 2 idle cores; needs the
+# test meshes: SHLIGHT_MESHES=DIR, default ../shared/meshes; build/bench/bench_tables --help).
+# Writes $(BUILD)/bench-tables/ (RESULTS-tables.md, tables/*.csv, manifest.txt), never the tracked
+# files; BENCH_TABLES_SECTIONS="annen hvl" runs a subset (not accepted).  bench-tables-accept
+# copies a complete run (manifest: "complete: yes") over bench/RESULTS-tables.md and bench/tables/.
+BENCH_TABLES_DIR := $(BUILD)/bench-tables
+.PHONY: bench-tables bench-tables-accept
 bench-tables: $(BUILD)/bench/bench_tables
-	@mkdir -p bench/tables
-	$(BUILD)/bench/bench_tables -o bench/RESULTS-tables.md -d bench/tables
+	$(BUILD)/bench/bench_tables -o $(BENCH_TABLES_DIR) $(if $(SHLIGHT_MESHES),--meshes $(SHLIGHT_MESHES)) $(BENCH_TABLES_SECTIONS)
+
+bench-tables-accept:
+	@grep -qx 'complete: yes' $(BENCH_TABLES_DIR)/manifest.txt 2>/dev/null || { \
+	  echo "bench-tables-accept: $(BENCH_TABLES_DIR)/manifest.txt does not record a complete run" \
+	       "(run 'make bench-tables' with all sections and every scene); nothing copied" >&2; exit 1; }
+	rm -f bench/tables/*.csv
+	cp $(BENCH_TABLES_DIR)/tables/*.csv $(BENCH_TABLES_DIR)/manifest.txt bench/tables/
+	sed 's|$(BENCH_TABLES_DIR)/tables/|bench/tables/|g' $(BENCH_TABLES_DIR)/RESULTS-tables.md > bench/RESULTS-tables.md
+	@echo "accepted; plots: python3 tools/plot.py --tables bench/tables --out bench/plots; then review git diff"
 
 # Regenerate the ZH lobe table (directions and weights) -- see tools/gen_lobes.c.
 lobes: $(BUILD)/tools/gen_lobes

@@ -1,7 +1,12 @@
 #!/usr/bin/env python3
 """Plots of the CSV files written by `make bench-tables` (bench/bench_tables.c).
 
-    build/venv/bin/python tools/plot.py [--tables bench/tables] [--out bench/plots]
+    python3 tools/plot.py [--tables build/bench-tables/tables] [--out build/bench-tables/plots]
+(any python3 with matplotlib, e.g. build/venv/bin/python).
+
+The defaults plot the latest `make bench-tables` run under build/ and never touch tracked
+files; after `make bench-tables-accept`, redraw the committed plots with
+    python3 tools/plot.py --tables bench/tables --out bench/plots
 
 Writes SVG and PNG files:
   accuracy_vs_time_<scene>  image error vs frame time, one curve per method
@@ -120,8 +125,8 @@ def hvl_table1(rows, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--tables", default="bench/tables", help="directory of the CSV files")
-    ap.add_argument("--out", default="bench/plots", help="output directory")
+    ap.add_argument("--tables", default="build/bench-tables/tables", help="directory of the CSV files")
+    ap.add_argument("--out", default="build/bench-tables/plots", help="output directory")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     for name, fn in (("accuracy_vs_time.csv", accuracy_vs_time), ("wu2020_fig8.csv", wu_fig8),
