@@ -44,11 +44,10 @@ int main(int argc, char **argv)
         "make demo: renders a scene (default: the embedded procedural one; a file: see bench/scenes/README.md)\n"
         "with the software-rasterized PRT harness (bench/common: rasterizer, shadows, textured lights and\n"
         "indirect light are the harness's; the SH lighting is the library's), once per lighting method,\n"
-        "and prints the stages that "
-        "ran, their cost, and each method's image error against per-vertex analytic shading.\n"
-        "Default scene: 10-50 s on a 2-core machine (load; shadow rays are cached after the first run);\n"
-        "the paper scenes up to minutes (they need the "
-        "test meshes: bench_tables --help).  Progress on stderr.\n"
+        "and prints the stages that ran, their cost, and each method's image error against per-vertex\n"
+        "analytic shading.  Default scene: 10-50 s on a 2-core machine, by load (shadow rays are cached\n"
+        "after the first run); the paper scenes up to minutes (they need the test meshes: bench_tables\n"
+        "--help).  Progress on stderr.\n"
         "Writes PREFIX.png and PREFIX.pfm (grid + Hermite), PREFIX-reference.png (per-vertex analytic)\n"
         "and PREFIX-error.png (10 x |difference|); shadowed transfer is cached under DIR.",
         opts, 2, 1};
