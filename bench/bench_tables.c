@@ -12,6 +12,7 @@
 #include "parfor.h"
 #include "prt.h"
 #include "util.h"
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -771,7 +772,16 @@ int main(int argc, char **argv)
     utc_now(started, sizeof started);
     bench_loadavg(load, sizeof load);
     nthreads = par_threads();
-    if (bench_mkdirs(csvs) || write_manifest(manifest, argc, argv, meshes, started, load, sec_list, nrun == NALL, 0, 0.0))
+    if (bench_mkdirs(csvs)) return 1;
+    DIR *old = opendir(csvs); /* CSV files of an earlier run: the directory holds this run's only */
+    for (struct dirent *e; old && (e = readdir(old));) {
+        const size_t n = strlen(e->d_name);
+        char path[1400];
+        snprintf(path, sizeof path, "%s/%s", csvs, e->d_name);
+        if (n > 4 && !strcmp(e->d_name + n - 4, ".csv")) remove(path);
+    }
+    if (old) closedir(old);
+    if (write_manifest(manifest, argc, argv, meshes, started, load, sec_list, nrun == NALL, 0, 0.0))
         return 1;
     md = bench_create(md_path, "w");
     if (!md) return 1;
