@@ -54,18 +54,24 @@ static void csv_close(FILE *f, const char *name)
     fprintf(md, "\nCSV: `%s/%s`\n", csv_dir, name);
 }
 
-/* Scenes loaded, with their status, for the manifest. */
+/* Scenes loaded (each file and status once, with a count), for the manifest. */
 static struct {
     char file[64];
-    int status;
+    int status, loads;
 } scenes_run[64];
 static int nscenes_run;
 
 static void note_scene(const char *file, int status)
 {
+    for (int i = 0; i < nscenes_run; ++i)
+        if (!strcmp(scenes_run[i].file, file) && scenes_run[i].status == status) {
+            ++scenes_run[i].loads;
+            return;
+        }
     if (nscenes_run == 64) return;
     snprintf(scenes_run[nscenes_run].file, sizeof scenes_run[0].file, "%s", file);
-    scenes_run[nscenes_run++].status = status;
+    scenes_run[nscenes_run].status = status;
+    scenes_run[nscenes_run++].loads = 1;
 }
 
 /* Load a scene (text: NULL reads scene_dir/file); a missing mesh is reported in the Markdown. */
@@ -691,8 +697,10 @@ static int write_manifest(const char *path, int argc, char **argv, const char *m
     for (int i = 0; i < meshes_count; ++i) fprintf(f, " %s", meshes_known[i].file);
     fprintf(f, ")\nsections: %s%s\n", sections, all_sections ? " (all)" : " (a subset)");
     for (int i = 0; i < nscenes_run; ++i)
-        fprintf(f, "scene %s: %s\n", scenes_run[i].file, scenes_run[i].status == 0 ? "ran" : scenes_run[i].status == SCENE_MISSING ? "skipped (mesh missing)" : "failed to load");
-    fprintf(f, "scenes: %d loaded, %d skipped or failed\n", nscenes_run - bad, bad);
+        fprintf(f, "scene %s: %s (%d load%s)\n", scenes_run[i].file,
+                scenes_run[i].status == 0 ? "ran" : scenes_run[i].status == SCENE_MISSING ? "skipped (mesh missing)" : "failed to load",
+                scenes_run[i].loads, scenes_run[i].loads > 1 ? "s" : "");
+    fprintf(f, "scenes: %d ran, %d skipped or failed\n", nscenes_run - bad, bad);
     fprintf(f, "complete: %s\n", finished && all_sections && bad == 0 ? "yes" : "no");
     return fclose(f) ? -1 : 0;
 }
