@@ -124,12 +124,28 @@ bench: $(BENCH_BIN)
 demo: $(BUILD)/bench/demo
 	$(BUILD)/bench/demo
 
-# The papers' results tables with the PRT harness (about 12 minutes on 2 cores):
-# bench/RESULTS-tables.md and bench/tables/*.csv; tools/plot.py draws bench/plots/.
-.PHONY: bench-tables
+# The papers' results tables with the PRT harness (about 4 minutes on 2 idle cores; needs the
+# test meshes: SHLIGHT_MESHES=DIR, default ../shared/meshes; build/bench/bench_tables --help).
+# Writes $(BUILD)/bench-tables/ (RESULTS-tables.md, tables/*.csv, manifest.txt), never the tracked
+# files; BENCH_TABLES_SECTIONS="annen hvl" runs a subset (not accepted).  bench-tables-accept
+# copies a complete run (manifest: "complete: yes") over bench/RESULTS-tables.md and bench/tables/,
+# and the plots that `make plots` drew from it over bench/plots/.
+BENCH_TABLES_DIR := $(BUILD)/bench-tables
+.PHONY: bench-tables bench-tables-accept
 bench-tables: $(BUILD)/bench/bench_tables
-	@mkdir -p bench/tables
-	$(BUILD)/bench/bench_tables -o bench/RESULTS-tables.md -d bench/tables
+	@rm -f $(BENCH_TABLES_DIR)/plots/*.png $(BENCH_TABLES_DIR)/plots/*.svg
+	$(BUILD)/bench/bench_tables -o $(BENCH_TABLES_DIR) $(if $(SHLIGHT_MESHES),--meshes $(SHLIGHT_MESHES)) $(BENCH_TABLES_SECTIONS)
+
+bench-tables-accept:
+	@grep -qx 'complete: yes' $(BENCH_TABLES_DIR)/manifest.txt 2>/dev/null || { \
+	  echo "bench-tables-accept: $(BENCH_TABLES_DIR)/manifest.txt does not record a complete run" \
+	       "(run 'make bench-tables' with all sections and every scene); nothing copied" >&2; exit 1; }
+	rm -f bench/tables/*.csv
+	cp $(BENCH_TABLES_DIR)/tables/*.csv $(BENCH_TABLES_DIR)/manifest.txt bench/tables/
+	sed 's|$(BENCH_TABLES_DIR)/tables/|bench/tables/|g' $(BENCH_TABLES_DIR)/RESULTS-tables.md > bench/RESULTS-tables.md
+	@if ls $(BENCH_TABLES_DIR)/plots/*.png >/dev/null 2>&1; then \
+	  cp $(BENCH_TABLES_DIR)/plots/*.png $(BENCH_TABLES_DIR)/plots/*.svg bench/plots/ && echo "accepted, with the plots of 'make plots'"; \
+	else echo "accepted; the plots were not drawn: run 'make plots' and accept again"; fi
 
 # Every CSV under bench/tables parses with a constant field count (tools/check_csv.py).
 .PHONY: check-csv
@@ -234,7 +250,8 @@ $(BUILD)/tools/stress: tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) 
 # (bench/oracle_export.c) for the image check.  Dr.Jit's LLVM backend loads a system libLLVM at
 # run time: oracle-llvm (tools/find_libllvm.py, Python stdlib only) finds one that Dr.Jit 1.5 can
 # use, or stops at once with the command that installs one, before the venv and the build;
-# tools/oracle.py then sets DRJIT_LIBLLVM_PATH to it.  plots: tools/plot.py, bench/plots/.
+# tools/oracle.py then sets DRJIT_LIBLLVM_PATH to it.  plots: tools/plot.py on the latest
+# bench-tables run ($(BUILD)/bench-tables/plots; bench-tables-accept copies them to bench/plots/).
 VENV       ?= build/venv
 VENV_PLOT  ?= build/venv-plot
 PYTHON     ?= python3
@@ -271,36 +288,37 @@ oracle-check: oracle-llvm
 	$(ORACLE_ENV) $(VENV)/bin/python tools/oracle.py --check
 
 plots: venv-plot
-	$(VENV_PLOT)/bin/python tools/plot.py
+	$(VENV_PLOT)/bin/python tools/plot.py --tables $(BENCH_TABLES_DIR)/tables --out $(BENCH_TABLES_DIR)/plots
 
 # ---- make help: every target, one line each, with its typical time on the 2-core CI machine
 # (make -j2 from a clean tree; a build step already done is not paid again).
 .PHONY: help
 help:
 	@echo 'shlight targets (typical time on 2 cores, make -j2; details in README.md):'
-	@printf '  %-13s %-66s %s\n' all 'build/libshlight.a and build/libshlight.so (the default target)' '~15 s'
-	@printf '  %-13s %-66s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
-	@printf '  %-13s %-66s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
-	@printf '  %-13s %-66s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
-	@printf '  %-13s %-66s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
-	@printf '  %-13s %-66s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
-	@printf '  %-13s %-66s %s\n' bench-tables 'the papers'\'' results tables (bench_tables; needs the meshes)' '~12 min'
-	@printf '  %-13s %-66s %s\n' install 'all + header, both libraries, shlight.pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
-	@printf '  %-13s %-66s %s\n' uninstall 'remove exactly those four files (same PREFIX and DESTDIR)' '<1 s'
-	@printf '  %-13s %-66s %s\n' lobes 'regenerate src/zh_tables.c with tools/gen_lobes' '1-2.5 min'
-	@printf '  %-13s %-66s %s\n' clean 'remove $$(BUILD)' '<1 s'
-	@printf '  %-13s %-66s %s\n' fuzz 'libFuzzer targets x FUZZ_SECONDS (60) each, ASan + UBSan' '~1 min build + 8 min'
-	@printf '  %-13s %-66s %s\n' fuzz-build 'build the fuzz binaries with clang into $$(BUILD)/fuzz/' '~1 min'
-	@printf '  %-13s %-66s %s\n' fuzz-bins '(inside fuzz-build) the fuzz binaries for the current CC' '~1 min'
-	@printf '  %-13s %-66s %s\n' fuzz-repro 'replay the open-bug reproducers tests/fuzz/crashes/*' 'fuzz-build + seconds'
-	@printf '  %-13s %-66s %s\n' stress 'STRESS_N (1e7) random and near-degenerate cases, 2 threads' '~7 min'
-	@printf '  %-13s %-66s %s\n' venv 'build/venv from tools/requirements.txt (Mitsuba, Dr.Jit)' 'minutes (download); then <1 s'
-	@printf '  %-13s %-66s %s\n' venv-plot 'build/venv-plot: numpy + matplotlib (tools/requirements-plot.txt)' '~1-3 min (download); then <1 s'
-	@printf '  %-13s %-66s %s\n' plots 'redraw bench/plots/ with tools/plot.py (venv-plot)' '~1 min'
-	@printf '  %-13s %-66s %s\n' oracle-llvm 'find a libLLVM >= 17 for Dr.Jit, or say which package to install' '<1 s'
-	@printf '  %-13s %-66s %s\n' oracle 'full Mitsuba 3 / Dr.Jit comparison, writes bench/ORACLE.md' '39 min'
-	@printf '  %-13s %-66s %s\n' oracle-check 'the CI subset of the oracle (20 configurations, one image)' '4 min'
-	@printf '  %-13s %-66s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
-	@printf '  %-13s %-66s %s\n' help 'this list' 'instant'
+	@printf '  %-19s %-64s %s\n' all 'build/libshlight.a and build/libshlight.so (the default target)' '~15 s'
+	@printf '  %-19s %-64s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
+	@printf '  %-19s %-64s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
+	@printf '  %-19s %-64s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
+	@printf '  %-19s %-64s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
+	@printf '  %-19s %-64s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
+	@printf '  %-19s %-64s %s\n' bench-tables 'the papers'\'' tables into build/bench-tables/ (needs the meshes)' '~5 min'
+	@printf '  %-19s %-64s %s\n' bench-tables-accept 'copy a complete bench-tables run (+ plots) over bench/' '<1 s'
+	@printf '  %-19s %-64s %s\n' install 'all + header, both libraries, shlight.pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
+	@printf '  %-19s %-64s %s\n' uninstall 'remove exactly those four files (same PREFIX and DESTDIR)' '<1 s'
+	@printf '  %-19s %-64s %s\n' lobes 'regenerate src/zh_tables.c with tools/gen_lobes' '1-2.5 min'
+	@printf '  %-19s %-64s %s\n' clean 'remove $$(BUILD)' '<1 s'
+	@printf '  %-19s %-64s %s\n' fuzz 'libFuzzer targets x FUZZ_SECONDS (60) each, ASan + UBSan' '~1 min build + 8 min'
+	@printf '  %-19s %-64s %s\n' fuzz-build 'build the fuzz binaries with clang into $$(BUILD)/fuzz/' '~1 min'
+	@printf '  %-19s %-64s %s\n' fuzz-bins '(inside fuzz-build) the fuzz binaries for the current CC' '~1 min'
+	@printf '  %-19s %-64s %s\n' fuzz-repro 'replay the open-bug reproducers tests/fuzz/crashes/*' 'fuzz-build + seconds'
+	@printf '  %-19s %-64s %s\n' stress 'STRESS_N (1e7) random and near-degenerate cases, 2 threads' '~7 min'
+	@printf '  %-19s %-64s %s\n' venv 'build/venv from tools/requirements.txt (Mitsuba, Dr.Jit)' 'minutes (download); then <1 s'
+	@printf '  %-19s %-64s %s\n' venv-plot 'build/venv-plot: numpy + matplotlib (tools/requirements-plot.txt)' '~1-3 min (download); then <1 s'
+	@printf '  %-19s %-64s %s\n' plots 'draw the latest bench-tables run into build/bench-tables/plots' '~1 min'
+	@printf '  %-19s %-64s %s\n' oracle-llvm 'find a libLLVM >= 17 for Dr.Jit, or say which package to install' '<1 s'
+	@printf '  %-19s %-64s %s\n' oracle 'full Mitsuba 3 / Dr.Jit comparison, writes bench/ORACLE.md' '39 min'
+	@printf '  %-19s %-64s %s\n' oracle-check 'the CI subset of the oracle (20 configurations, one image)' '4 min'
+	@printf '  %-19s %-64s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
+	@printf '  %-19s %-64s %s\n' help 'this list' 'instant'
 	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, PREFIX (/usr/local), DESTDIR,'
 	@echo '  TEST_FILTER, FUZZ_SECONDS, FUZZ_TARGETS, STRESS_N, STRESS_THREADS.'

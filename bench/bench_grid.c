@@ -4,7 +4,7 @@
  *  - cost of the analytic gradient vs coefficients only and vs finite differences,
  *  - Fig. 8: many lights on a heightfield, per-vertex analytic vs 8^3 grid + Hermite,
  *  - Fig. 9: grid resolution vs time and error; thread scaling of fill and interpolation.
- * All ratios come from one run.  CSVs (dir = argv[1], default build/bench):
+ * All ratios come from one run; --help.  CSVs (dir: -d, default build/bench):
  *  <dir>/bench_grid_fig4.csv: the Fig. 4 curves, then the 10 samples with their d/dx;
  *  <dir>/bench_grid.csv: one row per table row, value1/value2 = fig4: max error, / max |L72|;
  *  fig6: max |analytic - FD|, relative; gradcost: grad/coeffs and FD/analytic time ratios;
@@ -448,11 +448,24 @@ static void many_lights(void)
 
 int main(int argc, char **argv)
 {
-    const char *dir = argc > 1 ? argv[1] : "build/bench";
+    const char *dir = "build/bench";
+    const bench_opt opts[] = {{"-d", "--dir", "DIR", &dir, "directory of the two CSV files (default build/bench)"}};
+    const bench_cli cli = {
+        "bench_grid", "[-d DIR]",
+        "Gradients, sparse grids and interpolation (Wu et al. 2020, Sec. 6-7): Fig. 4 (coefficient (7,2)\n"
+        "along a line, trilinear / Taylor / Hermite from 10 samples), Fig. 6 (analytic gradients vs central\n"
+        "differences), the cost of the analytic gradient, Fig. 8 (many lights: per-vertex analytic vs an\n"
+        "8^3 grid + Hermite) and Fig. 9 (grid resolution vs time and error; thread scaling).\n"
+        "About 1 minute on a 2-core machine; progress on stderr.\n"
+        "Writes Markdown tables to stdout, DIR/bench_grid.csv (one row per table row) and\n"
+        "DIR/bench_grid_fig4.csv (the Fig. 4 curves and samples).",
+        opts, 1, 0};
+    bench_parse(&cli, argc, argv, NULL);
     char path[512];
     snprintf(path, sizeof path, "%s/bench_grid.csv", dir);
-    csv = fopen(path, "w");
-    if (csv) fprintf(csv, "section,case,count,value1,value2\n");
+    csv = bench_create(path, "w");
+    if (!csv) return 1;
+    fprintf(csv, "section,case,count,value1,value2\n");
     const double t0 = bench_now();
     bench_print_machine(stdout);
     FILE *la = fopen("/proc/loadavg", "r");
@@ -463,11 +476,16 @@ int main(int argc, char **argv)
         fclose(la);
     }
     printf("Load average at start (other processes share the 2 cores): %s\n", load);
+    bench_progress("Fig. 4, interpolation along a line (step 1/4)...");
     fig4(dir);
+    bench_progress("Fig. 6, gradients vs finite differences (step 2/4)...");
     fig6();
+    bench_progress("cost of the analytic gradient (step 3/4)...");
     grad_cost();
+    bench_progress("Figs. 8-9, many lights, grid resolution, threads (step 4/4)...");
     many_lights();
     printf("\n(total %.0f s; checksum %g)\n", bench_now() - t0, (double)bench_sink);
-    if (csv) fclose(csv);
+    if (fclose(csv)) return 1;
+    bench_progress("done; wrote %s and %s/bench_grid_fig4.csv", path, dir);
     return 0;
 }

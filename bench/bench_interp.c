@@ -11,7 +11,7 @@
  *    variants run the reference) is the cell search and weights plus 8 tiny loads,
  *    the part vectorizing across coefficients does not touch; 2 threads against 1;
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
- * CSV: $BUILD/bench/bench_interp.csv (argv[1] overrides). */
+ * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
@@ -22,10 +22,13 @@
 
 enum { CHUNK = 128, NPTS = 1 << 16, ROUNDS = 11 };
 
+static size_t max_bytes; /* --mb: a cap on out_of_cache_bytes (0: none) */
+
 /* Bytes that cannot stay in any cache: 4 x the last-level cache, at least 120 MB
- * (32 MB assumed where sysconf does not know the L3). */
+ * (32 MB assumed where sysconf does not know the L3); at most --mb. */
 static size_t out_of_cache_bytes(void)
 {
+    if (max_bytes) return max_bytes;
     const long l3 = sysconf(_SC_LEVEL3_CACHE_SIZE);
     const size_t llc = l3 > 0 ? (size_t)l3 : (size_t)32 << 20;
     return 4 * llc > ((size_t)120 << 20) ? 4 * llc : (size_t)120 << 20;
@@ -168,8 +171,38 @@ static double polygon_batch_time(int n, int with_grad, const double *pts)
 
 int main(int argc, char **argv)
 {
-    const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_interp.csv";
-    csv = fopen(csv_path, "w");
+    const char *csv_path = "build/bench/bench_interp.csv", *mb_arg = NULL;
+    const double gb = (double)out_of_cache_bytes() / (1 << 30);
+    char about[2048];
+    snprintf(about, sizeof about,
+             "Grid interpolation (shl_grid_interp, float storage): vertices per second for trilinear, Taylor and\n"
+             "Hermite at lmax 0, 4 and 8 from an L2-resident grid and from a grid far larger than the caches\n"
+             "(random vertex order), the SIMD kernel against the scalar reference, bytes per vertex and the\n"
+             "share of this core's memory bandwidth (measured in the same run), 2 threads against 1, and the\n"
+             "papers' GPU throughput next to ours.\n"
+             "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
+             "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
+             "--mb "
+             "caps S (smaller S: faster, but a large L3 may then hold part of the grid).\n"
+             "About 2-3 minutes on an idle 2-core machine with S = 1.5 GB (14 minutes at load average 13);\n"
+             "progress on stderr.\n"
+             "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
+             gb);
+    const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_interp.csv)"},
+                              {"-m", "--mb", "MB", &mb_arg, "cap on the out-of-cache size S in MB (at least 16)"}};
+    const bench_cli cli = {"bench_interp", "[-o FILE] [--mb MB]", about, opts, 2, 0};
+    bench_parse(&cli, argc, argv, NULL);
+    if (mb_arg) {
+        char *end;
+        const long mb = strtol(mb_arg, &end, 10);
+        if (*end || mb < 16) {
+            fprintf(stderr, "bench_interp: --mb needs a whole number of MB, at least 16 (got '%s')\n", mb_arg);
+            return 2;
+        }
+        max_bytes = (size_t)mb << 20;
+    }
+    csv = bench_create(csv_path, "w");
+    if (!csv) return 1;
     bench_print_machine(stdout);
     shl_ctx *probe;
     must(shl_ctx_create(0, &probe), "ctx");
@@ -184,16 +217,21 @@ int main(int argc, char **argv)
     bw_doubles = out_of_cache_bytes() / sizeof(double);
     if (bw_doubles < ((size_t)1 << 25)) bw_doubles = (size_t)1 << 25;
     bw_doubles &= ~(size_t)7; /* read_bw sums 8 at a time */
+    bench_progress("filling the bandwidth arrays, %.0f MB (step 1/5)...", 1.5 * sizeof(double) * (double)bw_doubles / (1 << 20));
     double *bw_a = xmalloc(sizeof(double) * bw_doubles), *bw_b = xmalloc(sizeof(double) * bw_doubles / 4),
            *bw_c = xmalloc(sizeof(double) * bw_doubles / 4);
     for (size_t i = 0; i < bw_doubles; ++i) bw_a[i] = 1.0 / (1.0 + (double)(i & 1023));
     for (size_t i = 0; i < bw_doubles / 4; ++i) bw_b[i] = bw_c[i] = bw_a[i], bw_a[i] = 0.0;
     double rbw[5], tbw[5];
+    bench_progress("memory bandwidth, 5 rounds (step 2/5)...");
     for (int r = 0; r < 5; ++r) {
         rbw[r] = read_bw(bw_a);
         tbw[r] = triad_bw(bw_a, bw_b, bw_c, bw_doubles / 4);
     }
     const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5);
+    free(bw_a); /* before the grids: the peak memory is then two grids, not the arrays as well */
+    free(bw_b);
+    free(bw_c);
     const double mb = sizeof(double) * (double)bw_doubles / (1 << 20);
     printf("\nLast-level cache (sysconf): %ld KB; out-of-cache size: %.0f MB\n", sysconf(_SC_LEVEL3_CACHE_SIZE) / 1024,
            (double)out_of_cache_bytes() / (1 << 20));
@@ -224,9 +262,13 @@ int main(int argc, char **argv)
         unsetenv("SHLIGHT_ISA");
         for (int big = 0; big <= 1; ++big) {
             const int res = big ? out_of_cache_res(lmax) : 4;
+            bench_progress("interpolation, lmax %d, %s grid: filling 2 x %d^3 nodes (step 3/5)...", lmax,
+                           big ? "out-of-cache" : "L2", res);
             shl_grid *g = make_grid(ctx, res), *gr = make_grid(ctx_ref, res);
             for (int m = 0; m < 3; ++m) {
                 /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
+                bench_progress("interpolation, lmax %d, %s grid: timing %s (step 3/5)...", lmax, big ? "out-of-cache" : "L2",
+                               mname[m]);
                 job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out}, jr = js;
                 jr.g = gr;
                 const long reps = big ? 1 : (lmax == 0 ? 400 : lmax == 4 ? 100 : 40);
@@ -267,6 +309,7 @@ int main(int argc, char **argv)
         shl_ctx *ctx;
         must(shl_ctx_create(lmax, &ctx), "ctx");
         for (int big = 0; big <= 1; ++big) {
+            bench_progress("2 threads vs 1, lmax %d, %s grid (step 4/5)...", lmax, big ? "out-of-cache" : "L2");
             shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
             job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out}, j2 = j1;
             j2.nthreads = 2;
@@ -290,6 +333,7 @@ int main(int argc, char **argv)
 
     /* The papers' GPU throughput, implied by their frame and stage times (constants below),
      * next to this run's per-core rates: different hardware, different work per frame. */
+    bench_progress("polygon batch throughput for the papers' comparison (step 5/5)...");
     const double quad8 = polygon_batch_time(4, 0, pts), tri8g = polygon_batch_time(3, 1, pts);
     /* Wang 2018 Sec. 6 / Table 2: plant, 163K triangles, one rectangle light, lmax 8, 350 fps
      * (whole frame) on a GTX 1080 Ti; a closed triangle mesh has about half as many vertices. */
@@ -313,13 +357,11 @@ int main(int argc, char **argv)
         fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
     }
     printf("\n(checksum %g)\n", (double)bench_sink);
-    if (csv) fclose(csv);
+    if (fclose(csv)) return 1;
+    bench_progress("done; wrote %s", csv_path);
     free(pts);
     free(out);
     free(big_out);
-    free(bw_a);
-    free(bw_b);
-    free(bw_c);
     shl_ctx_destroy(probe);
     return 0;
 }

@@ -3,7 +3,7 @@
  *  - time vs number of edges (Fig. 7), with fitted exponents,
  *  - ZH recurrence vs the monomial-moment baseline (Table 2 "Monomial"),
  *  - scalar evaluations per second per core (the SIMD baseline).
- * All ratios come from one run.  CSV: $BUILD/bench/bench_polygon.csv (argv[1] overrides). */
+ * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help. */
 #include "monomial.h"
 #include "polygon.h"
 #include "shlight.h"
@@ -125,12 +125,24 @@ static void setup(job *j, const shl_ctx *ctx, int n)
 
 int main(int argc, char **argv)
 {
-    const char *csv_path = argc > 1 ? argv[1] : "build/bench/bench_polygon.csv";
-    FILE *csv = fopen(csv_path, "w");
+    const char *csv_path = "build/bench/bench_polygon.csv";
+    const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_polygon.csv)"}};
+    const bench_cli cli = {
+        "bench_polygon", "[-o FILE]",
+        "Polygon-light SH coefficients (shl_polygon, Wang & Ramamoorthi 2018), one core, scalar double:\n"
+        "time per evaluation vs lmax 2..30 split into ZH recurrence and rotation (Fig. 6), vs edge count\n"
+        "3..32 (Fig. 7) with fitted exponents, the ZH recurrence vs the monomial-moment baseline (Table 2),\n"
+        "and evaluations per second.  About 10 s on an idle 2-core machine.\n"
+        "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
+        opts, 1, 0};
+    bench_parse(&cli, argc, argv, NULL);
+    FILE *csv = bench_create(csv_path, "w");
+    if (!csv) return 1;
     static job j;
     bench_print_machine(stdout);
     if (csv) fprintf(csv, "section,lmax,edges,ns_total,ns_zh,ns_rotation,ns_monomial_total\n");
 
+    bench_progress("time vs lmax (step 1/4)...");
     printf("\n## Time per evaluation vs lmax (triangle light, double; Wang 2018 Fig. 6)\n\n");
     printf("| lmax | coeffs | total ns | setup+ZH recurrence ns | rotation ns | ns/coeff |\n|---|---|---|---|---|---|\n");
     const int lmaxes[] = {2, 4, 6, 8, 10, 12, 14, 18, 22, 26, 30};
@@ -151,6 +163,7 @@ int main(int argc, char **argv)
            "(1 = linear; the rotation is O(lmax^3) = coeffs^1.5 and takes over at high lmax)\n",
            bench_loglog_slope(xs, ys, nl));
 
+    bench_progress("time vs edge count (step 2/4)...");
     printf("\n## Time per evaluation vs edge count (lmax 8, double; Wang 2018 Fig. 7)\n\n| edges | total ns |\n|---|---|\n");
     shl_ctx *ctx8;
     shl_ctx_create(8, &ctx8);
@@ -166,6 +179,7 @@ int main(int argc, char **argv)
     }
     printf("\nFitted exponent of time vs edges: %.2f (1 = linear)\n", bench_loglog_slope(xs, ys, ne));
 
+    bench_progress("ZH recurrence vs monomial baseline (step 3/4)...");
     printf("\n## ZH recurrence vs monomial-moment baseline (triangle; Wang 2018 Table 2)\n\n");
     printf("| lmax | recurrence ns | monomial ns | monomial/recurrence time (ZH part) | same, full pipeline | max |ZH recurrence - monomial| |\n|---|---|---|---|---|---|\n");
     const int cmp_l[4] = {8, 14, 20, 30};
@@ -189,6 +203,7 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx);
     }
 
+    bench_progress("scalar throughput (step 4/4)...");
     setup(&j, ctx8, 3);
     const double td = timed(run_full, &j), tf = timed(run_full_f, &j);
     printf("\n## Scalar throughput, one core, triangle, lmax 8\n\n");
@@ -196,7 +211,8 @@ int main(int argc, char **argv)
            1.0 / td, td * 1e9, 1.0 / tf, tf * 1e9);
     if (csv) fprintf(csv, "throughput,8,3,%.1f,,,\n", td * 1e9);
     shl_ctx_destroy(ctx8);
-    if (csv) fclose(csv);
     printf("\n(checksum %g)\n", (double)bench_sink);
+    if (fclose(csv)) return 1;
+    bench_progress("done; wrote %s", csv_path);
     return 0;
 }

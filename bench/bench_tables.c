@@ -1,23 +1,24 @@
 /* make bench-tables: the results tables of the four papers, reproduced on this
- * machine with the software-rasterized PRT harness (bench/common), Markdown to
- * bench/RESULTS-tables.md (-o) and CSV files to bench/tables/ (-d).
- *   usage: bench_tables [-o file.md] [-d csv-dir] [section ...]
- *   sections: wu (Wu 2020 Table 1 and the Fig. 12 case), wu-fig8, wu-fig9, wang (Wang 2018 Table 2),
- *             annen (Annen 2004 Table 1), hvl (HVL Table 1), sweep (accuracy vs
- *             time); default: all of them.
- * Scenes come from bench/scenes; those that need ../shared/meshes say so and are
- * skipped when it is absent. */
+ * machine with the software-rasterized PRT harness (bench/common).  Writes under
+ * -o DIR (default build/bench-tables): RESULTS-tables.md, the CSV files in tables/ and
+ * manifest.txt (scenes run, CPU, load, date); `make bench-tables-accept` copies a
+ * complete run over the committed bench/RESULTS-tables.md and bench/tables/.
+ * Options and sections: bench_tables --help.  The paper scenes read the public test
+ * meshes (bench/common/meshes.h); without them it stops before measuring. */
 #include "bvh.h"
 #include "image.h"
 #include "lambert.h"
+#include "meshes.h"
 #include "parfor.h"
 #include "prt.h"
 #include "util.h"
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 
 static FILE *md;
 static const char *csv_dir = "bench/tables";
@@ -70,6 +71,26 @@ static void csv_close(FILE *f, const char *name)
     fprintf(md, "\nCSV: `%s/%s`\n", csv_dir, name);
 }
 
+/* Scenes loaded (each file and status once, with a count), for the manifest. */
+static struct {
+    char file[64];
+    int status, loads;
+} scenes_run[64];
+static int nscenes_run;
+
+static void note_scene(const char *file, int status)
+{
+    for (int i = 0; i < nscenes_run; ++i)
+        if (!strcmp(scenes_run[i].file, file) && scenes_run[i].status == status) {
+            ++scenes_run[i].loads;
+            return;
+        }
+    if (nscenes_run == 64) return;
+    snprintf(scenes_run[nscenes_run].file, sizeof scenes_run[0].file, "%s", file);
+    scenes_run[nscenes_run].status = status;
+    scenes_run[nscenes_run++].loads = 1;
+}
+
 /* Load a scene (text: NULL reads scene_dir/file); a missing mesh is reported in the Markdown. */
 static int load_scene(const char *file, const char *text, scene *s)
 {
@@ -77,6 +98,7 @@ static int load_scene(const char *file, const char *text, scene *s)
     snprintf(path, sizeof path, "%s/%s", scene_dir, file);
     fprintf(stderr, "[%s]\n", file);
     const int st = text ? scene_parse(text, file, scene_dir, s, err, sizeof err) : scene_load(path, s, err, sizeof err);
+    note_scene(file, st);
     if (st == SCENE_MISSING)
         fprintf(md, "\n**%s skipped**: %s - the paper scenes read `../shared/meshes/` beside the checkout, which is "
                     "absent here.\n", file, err);
@@ -1173,58 +1195,155 @@ static void section_sweep(void)
     csv_close(csv, "accuracy_vs_time.csv");
 }
 
+static void utc_now(char *buf, size_t len)
+{
+    const time_t t = time(NULL);
+    strftime(buf, len, "%Y-%m-%dT%H:%M:%SZ", gmtime(&t));
+}
+
+/* manifest.txt: what ran, where, when; "complete: yes" only after a full run with every scene loaded. */
+static int write_manifest(const char *path, int argc, char **argv, const char *meshes, const char *started,
+                          const char *load_start, const char *sections, int all_sections, int finished, double seconds)
+{
+    FILE *f = bench_create(path, "w");
+    if (!f) return -1;
+    char now[32], load[64];
+    utc_now(now, sizeof now);
+    bench_loadavg(load, sizeof load);
+    int bad = 0;
+    for (int i = 0; i < nscenes_run; ++i) bad += scenes_run[i].status != 0;
+    fprintf(f, "# bench_tables manifest (bench/bench_tables.c)\ncommand:");
+    for (int i = 0; i < argc; ++i) fprintf(f, " %s", argv[i]);
+    fprintf(f, "\nstarted: %s\n%s: %s\n", started, finished ? "finished" : "last update (not finished)", now);
+    if (finished) fprintf(f, "run time: %.0f s\n", seconds);
+    bench_print_machine(f);
+    fprintf(f, "threads: %d\nload average at start: %s\nload average now: %s\n", nthreads, load_start, load);
+    fprintf(f, "meshes: %s (SHA-256 verified:", meshes);
+    for (int i = 0; i < meshes_count; ++i) fprintf(f, " %s", meshes_known[i].file);
+    fprintf(f, ")\nsections: %s%s\n", sections, all_sections ? " (all)" : " (a subset)");
+    for (int i = 0; i < nscenes_run; ++i)
+        fprintf(f, "scene %s: %s (%d load%s)\n", scenes_run[i].file,
+                scenes_run[i].status == 0 ? "ran" : scenes_run[i].status == SCENE_MISSING ? "skipped (mesh missing)" : "failed to load",
+                scenes_run[i].loads, scenes_run[i].loads > 1 ? "s" : "");
+    fprintf(f, "scenes: %d ran, %d skipped or failed\n", nscenes_run - bad, bad);
+    fprintf(f, "complete: %s\n", finished && all_sections && bad == 0 ? "yes" : "no");
+    return fclose(f) ? -1 : 0;
+}
+
 int main(int argc, char **argv)
 {
-    const char *out = NULL;
-    const char *sections[16];
-    int nsec = 0;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "-o") && i + 1 < argc) out = argv[++i];
-        else if (!strcmp(argv[i], "-d") && i + 1 < argc) csv_dir = argv[++i];
-        else if (argv[i][0] != '-' && nsec < 16) sections[nsec++] = argv[i];
-        else {
-            fprintf(stderr, "usage: %s [-o file.md] [-d csv-dir] [wu wu-fig8 wu-fig9 wang annen hvl sweep]\n", argv[0]);
-            return 2;
-        }
-    }
     static const struct {
         const char *name;
         void (*fn)(void);
     } all[] = {{"wu", section_wu}, {"wu-fig8", section_wu_fig8}, {"wu-fig9", section_wu_fig9}, {"wang", section_wang},
                {"annen", section_annen}, {"hvl", section_hvl}, {"sweep", section_sweep}};
-    md = out ? fopen(out, "w") : stdout;
-    if (!md) {
-        fprintf(stderr, "bench_tables: cannot write %s\n", out);
+    enum { NALL = sizeof all / sizeof all[0] };
+    const char *outdir = "build/bench-tables", *meshes = getenv(MESHES_ENV);
+    if (!meshes || !meshes[0]) meshes = MESHES_DEFAULT_DIR;
+    const bench_opt opts[] = {
+        {"-o", "--out", "DIR", &outdir, "output directory (default build/bench-tables)"},
+        {"-m", "--meshes", "DIR", &meshes, "test meshes (default $" MESHES_ENV ", else " MESHES_DEFAULT_DIR ")"},
+    };
+    const bench_cli cli = {
+        "bench_tables", "[-o DIR] [-m DIR] [section ...]",
+        "The results tables of four papers (Wu 2020 Table 1 and Figs. 8-9, Wang 2018 Table 2, Annen 2004\n"
+        "Table 1, HVL 2022 Table 1) and an accuracy-vs-time sweep, reproduced with the software-rasterized\n"
+        "PRT harness on 17 scenes (bench/scenes).  About 4 minutes on an idle 2-core machine (sections:\n"
+        "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 10 s, sweep 70 s); progress on stderr.\n"
+        "\n"
+        "sections: wu wu-fig8 wu-fig9 wang annen hvl sweep (default: all; a subset is marked incomplete).\n"
+        "\n"
+        "Writes DIR/RESULTS-tables.md, DIR/tables/*.csv and DIR/manifest.txt (command, date, CPU, load\n"
+        "average, which scenes ran, \"complete: yes\" for a full run).  It never writes the committed\n"
+        "bench/RESULTS-tables.md or bench/tables/: `make bench-tables-accept` copies a complete run there.\n"
+        "\n"
+        "Needs the public test meshes cow.obj, spot.obj, stanford-bunny.obj, suzanne.obj and teapot.obj\n"
+        "(public GitHub repository alecjacobson/common-3d-test-models, folder data/:\n"
+        MESHES_SOURCE "), read from --meshes DIR, else $" MESHES_ENV ", else\n"
+        MESHES_DEFAULT_DIR " relative to the current directory (the repository root under make).  Their\n"
+        "SHA-256 are checked first; a missing or different file stops the run (exit 1) before anything\n"
+        "is measured or written.  Run from the repository root (scenes are read from bench/scenes).",
+        opts, (int)(sizeof opts / sizeof opts[0]), 16};
+    const char *sections[16];
+    const int nsec = bench_parse(&cli, argc, argv, sections);
+    char sec_list[256] = "";
+    for (int i = 0; i < nsec; ++i) {
+        int known = 0;
+        for (int k = 0; k < NALL; ++k) known |= !strcmp(sections[i], all[k].name);
+        if (!known) {
+            fprintf(stderr, "bench_tables: unknown section '%s' (sections: wu wu-fig8 wu-fig9 wang annen hvl sweep)\n", sections[i]);
+            return 2;
+        }
+    }
+    int nrun = 0;
+    for (int k = 0; k < NALL; ++k) {
+        int run = nsec == 0;
+        for (int i = 0; i < nsec; ++i) run |= !strcmp(sections[i], all[k].name);
+        if (!run) continue;
+        ++nrun;
+        snprintf(sec_list + strlen(sec_list), sizeof sec_list - strlen(sec_list), "%s%s", nrun > 1 ? " " : "", all[k].name);
+    }
+
+    char err[4096];
+    if (meshes_verify(meshes, err, sizeof err)) {
+        fprintf(stderr, "bench_tables: the paper scenes need the public test meshes, and these are missing or differ:\n%s"
+                        "Nothing was measured or written.  Get the five OBJ files from the public GitHub repository\n"
+                        "alecjacobson/common-3d-test-models, folder data/ (" MESHES_SOURCE "),\n"
+                        "into one directory and pass it as --meshes DIR or " MESHES_ENV "=DIR (make bench-tables "
+                        MESHES_ENV "=DIR);\nthe default is " MESHES_DEFAULT_DIR " relative to the current directory.  "
+                        "Expected SHA-256 (sha256sum):\n", err);
+        for (int i = 0; i < meshes_count; ++i) fprintf(stderr, "  %s  %s\n", meshes_known[i].sha256, meshes_known[i].file);
         return 1;
     }
+    scene_mesh_dir = meshes;
+
+    char md_path[1024], manifest[1024], csvs[1024], started[32], load[64];
+    snprintf(md_path, sizeof md_path, "%s/RESULTS-tables.md", outdir);
+    snprintf(manifest, sizeof manifest, "%s/manifest.txt", outdir);
+    snprintf(csvs, sizeof csvs, "%s/tables", outdir);
+    csv_dir = csvs;
+    utc_now(started, sizeof started);
+    bench_loadavg(load, sizeof load);
     nthreads = par_threads();
+    if (bench_mkdirs(csvs)) return 1;
+    DIR *old = opendir(csvs); /* CSV files of an earlier run: the directory holds this run's only */
+    for (struct dirent *e; old && (e = readdir(old));) {
+        const size_t n = strlen(e->d_name);
+        char path[1400];
+        snprintf(path, sizeof path, "%s/%s", csvs, e->d_name);
+        if (n > 4 && !strcmp(e->d_name + n - 4, ".csv")) remove(path);
+    }
+    if (old) closedir(old);
+    if (write_manifest(manifest, argc, argv, meshes, started, load, sec_list, nrun == NALL, 0, 0.0))
+        return 1;
+    md = bench_create(md_path, "w");
+    if (!md) return 1;
+    bench_progress("meshes verified in %s; writing %s, %s/*.csv, %s", meshes, md_path, csvs, manifest);
     const double t0 = bench_now();
     fprintf(md, "# The papers' results tables, reproduced with the PRT harness\n\n"
                 "Generated by `make bench-tables` (bench/bench_tables.c; harness in bench/common, scenes in\n"
                 "bench/scenes).  bench/RESULTS.md sets these tables beside the papers' and gives a verdict for each.\n\n");
     bench_print_machine(md);
-    char load[64] = "unknown";
-    FILE *la = fopen("/proc/loadavg", "r");
-    if (la) {
-        if (!fgets(load, sizeof load, la)) snprintf(load, sizeof load, "unknown");
-        load[strcspn(load, "\n")] = '\0';
-        fclose(la);
-    }
     shl_ctx *ctx;
     shl_ctx_create(0, &ctx);
     fprintf(md, "\nThreads: %d; batch ISA: %s; load average at start: %s (a shared machine: times are minima of\n"
                 "repeated runs where stated).\n", nthreads, shl_ctx_isa(ctx), load);
     shl_ctx_destroy(ctx);
-    for (unsigned k = 0; k < sizeof all / sizeof all[0]; ++k) {
+    int done = 0;
+    for (unsigned k = 0; k < NALL; ++k) {
         int run = nsec == 0;
         for (int i = 0; i < nsec; ++i) run |= !strcmp(sections[i], all[k].name);
         if (!run) continue;
+        bench_progress("section %s (%d/%d)...", all[k].name, ++done, nrun);
         const double ts = bench_now();
         all[k].fn();
         fprintf(md, "\n(section %s: %.0f s)\n", all[k].name, bench_now() - ts);
         fflush(md);
+        write_manifest(manifest, argc, argv, meshes, started, load, sec_list, nrun == NALL, 0, 0.0);
     }
     fprintf(md, "\n(total %.0f s)\n", bench_now() - t0);
-    if (out) fclose(md);
+    if (fclose(md)) return 1;
+    if (write_manifest(manifest, argc, argv, meshes, started, load, sec_list, nrun == NALL, 1, bench_now() - t0)) return 1;
+    bench_progress("done: %s (%s)", manifest, nrun == NALL ? "a full run; make bench-tables-accept copies it" : "a subset of the sections");
     return 0;
 }

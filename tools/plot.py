@@ -1,10 +1,12 @@
 #!/usr/bin/env python3
 """Plots of the CSV files written by `make bench-tables` (bench/bench_tables.c).
 
-    build/venv-plot/bin/python tools/plot.py [--tables bench/tables] [--out bench/plots]
+    build/venv-plot/bin/python tools/plot.py [--tables build/bench-tables/tables] [--out build/bench-tables/plots]
 
-'make plots' runs it with the defaults after 'make venv-plot' (numpy and matplotlib only,
-tools/requirements-plot.txt).
+'make plots' runs it with these defaults (after 'make venv-plot': numpy and matplotlib only,
+tools/requirements-plot.txt): it draws the latest `make bench-tables` run under build/ and never
+touches tracked files; `make bench-tables-accept` then copies a complete run's tables and
+plots over bench/tables/ and bench/plots/.
 
 Writes SVG and PNG files:
   accuracy_vs_time_<scene>  image error vs frame time, one curve per method
@@ -306,8 +308,8 @@ def panel_figure(name, tables, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--tables", default="bench/tables", help="directory of the CSV files")
-    ap.add_argument("--out", default="bench/plots", help="output directory")
+    ap.add_argument("--tables", default="build/bench-tables/tables", help="directory of the CSV files")
+    ap.add_argument("--out", default="build/bench-tables/plots", help="output directory")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     for name, fn in (("accuracy_vs_time.csv", accuracy_vs_time), ("wu2020_fig8.csv", wu_fig8),

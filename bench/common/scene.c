@@ -1,4 +1,5 @@
 #include "scene.h"
+#include "meshes.h"
 #include "obj.h"
 #include "vec3.h"
 #include <errno.h>
@@ -192,6 +193,8 @@ static void affine_apply(mesh *m, const double lin[9], const double t[3])
     mesh_transform(m, a);
 }
 
+const char *scene_mesh_dir;
+
 static int parse_object(line_t *L, scene *s, const char *basedir)
 {
     const char *mname = next_tok(L), *shape = next_tok(L);
@@ -219,6 +222,11 @@ static int parse_object(line_t *L, scene *s, const char *basedir)
         char path[1024], err[512];
         if (!file) return fail(L, "mesh needs a file");
         snprintf(path, sizeof path, "%s%s%s", file[0] == '/' ? "" : basedir, file[0] == '/' ? "" : "/", file);
+        if (scene_mesh_dir) {
+            const char *base = strrchr(file, '/') ? strrchr(file, '/') + 1 : file;
+            if (!meshes_find(base)) return fail(L, "not one of the checksummed test meshes (bench/common/meshes.c)");
+            snprintf(path, sizeof path, "%s/%s", scene_mesh_dir, base);
+        }
         FILE *f = fopen(path, "rb");
         if (!f) {
             snprintf(L->err, L->errlen, "%s:%d: mesh file %s not found", L->name, L->lineno, path);

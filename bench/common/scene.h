@@ -60,6 +60,11 @@ extern const char scene_default_text[];
 int scene_parse(const char *text, const char *name, const char *basedir, scene *s, char *err, size_t errlen);
 /* Read and parse a scene file (mesh paths relative to its directory). */
 int scene_load(const char *path, scene *s, char *err, size_t errlen);
+
+/* NULL (default): a mesh statement's file is read at its path.  Set (bench_tables sets it to the
+ * checksum-verified mesh directory): the file is read from this directory by its base name, and
+ * only the meshes of bench/common/meshes.h are accepted. */
+extern const char *scene_mesh_dir;
 void scene_free(scene *s);
 
 /* All lights (polygons and spheres) as a light set; NULL on failure. */

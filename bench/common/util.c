@@ -1,7 +1,10 @@
 #include "util.h"
+#include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #ifndef SHL_BUILD_FLAGS
@@ -94,4 +97,100 @@ double bench_loglog_slope(const double *x, const double *y, int n)
         sxy += lx * ly;
     }
     return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+static const char *prog_name = "bench";
+static double prog_start = -1.0;
+
+static void print_usage(const bench_cli *cli, FILE *f, int full)
+{
+    fprintf(f, "usage: %s %s\n", cli->name, cli->synopsis);
+    if (full) fprintf(f, "\n%s\n", cli->about);
+    fprintf(f, "\noptions:\n  -h, --help%*s print this help and exit\n", 14, "");
+    for (int i = 0; i < cli->nopts; ++i) {
+        const bench_opt *o = &cli->opts[i];
+        char lhs[64];
+        snprintf(lhs, sizeof lhs, "%s%s%s%s%s", o->flag, o->longflag ? ", " : "", o->longflag ? o->longflag : "",
+                 o->metavar ? " " : "", o->metavar ? o->metavar : "");
+        fprintf(f, "  %-24s %s\n", lhs, o->help);
+    }
+}
+
+int bench_parse(const bench_cli *cli, int argc, char **argv, const char **args)
+{
+    prog_name = cli->name;
+    prog_start = bench_now();
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    int nargs = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            print_usage(cli, stdout, 1);
+            exit(0);
+        }
+        if (a[0] != '-' || !a[1]) {
+            if (nargs == cli->max_args) {
+                fprintf(stderr, "%s: unexpected argument '%s'\n", cli->name, a);
+                print_usage(cli, stderr, 0);
+                exit(2);
+            }
+            args[nargs++] = a;
+            continue;
+        }
+        const bench_opt *o = NULL;
+        for (int k = 0; k < cli->nopts && !o; ++k)
+            if (!strcmp(a, cli->opts[k].flag) || (cli->opts[k].longflag && !strcmp(a, cli->opts[k].longflag)))
+                o = &cli->opts[k];
+        if (!o || (o->metavar && i + 1 >= argc)) {
+            fprintf(stderr, o ? "%s: option %s needs a value\n" : "%s: unknown option '%s'\n", cli->name, a);
+            print_usage(cli, stderr, 0);
+            exit(2);
+        }
+        *o->value = o->metavar ? argv[++i] : "1";
+    }
+    return nargs;
+}
+
+void bench_progress(const char *fmt, ...)
+{
+    if (prog_start < 0) prog_start = bench_now();
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "%s [%3.0f s]: ", prog_name, bench_now() - prog_start);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    fflush(stderr);
+    va_end(ap);
+}
+
+int bench_mkdirs(const char *dir)
+{
+    char p[1024];
+    if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) return -1;
+    for (char *c = p + 1; *c; ++c) {
+        if (*c != '/') continue;
+        *c = '\0';
+        if (mkdir(p, 0777) && errno != EEXIST) return -1;
+        *c = '/';
+    }
+    return mkdir(p, 0777) && errno != EEXIST ? -1 : 0;
+}
+
+FILE *bench_create(const char *path, const char *mode)
+{
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    FILE *f = NULL;
+    if (!slash || slash == dir || (*slash = '\0', !bench_mkdirs(dir))) f = fopen(path, mode);
+    if (!f) fprintf(stderr, "%s: cannot write %s: %s\n", prog_name, path, strerror(errno));
+    return f;
+}
+
+void bench_loadavg(char *buf, size_t len)
+{
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f || !fgets(buf, (int)len, f)) snprintf(buf, len, "unknown");
+    if (f) fclose(f);
+    buf[strcspn(buf, "\n")] = '\0';
 }
