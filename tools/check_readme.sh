@@ -21,6 +21,7 @@
 # Afterwards no file may be left under HOME (README's own `make uninstall` must
 # remove what its `make install` wrote).  Every C block is also compiled with
 # -std=c11 -Wall -Wextra -Wpedantic -Werror (extra check, not a README command).
+# Also: the Layout section names every file of src/ and tools/ and each simd/*.h.
 # Usage: tools/check_readme.sh [MARKDOWN]   (default README.md)
 set -euo pipefail
 md=README.md
@@ -62,6 +63,14 @@ END {
     if (nrun == 0) fail("no <!-- run --> block")
     exit bad
 }' "$md" || { echo "check_readme: $md: markers or blocks malformed (see above)"; exit 1; }
+
+# README's Layout section names every file of src/ and tools/ and every kernel text of simd/.
+layout=$(awk '/^## Layout/{on=1; next} on && /^## /{exit} on' "$md")
+for f in src/* tools/* simd/*.h; do
+    [ -f "$f" ] || continue
+    grep -qF "$(basename "$f")" <<<"$layout" ||
+        { echo "check_readme: $md's Layout section does not name $f"; exit 1; }
+done
 
 # Every C block compiles warning-free against the header (extra check).
 for f in "$tmp"/blocks/*; do
