@@ -5,6 +5,7 @@
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
+#include "isa_ctx.h"
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -95,9 +96,9 @@ SHL_TEST(grid_bytes_per_node)
 }
 
 /* Every node of a double grid holds shl_lights_eval at its position, bit for
- * bit; every node of a float grid the float batch at its position rounded to
- * float, bit for bit, within the batch tolerance of shl_lights_eval
- * (check_float_node). */
+ * bit; every node of a float grid, for every ISA this machine runs, the float
+ * batch at its position rounded to float, bit for bit, within the batch
+ * tolerance of shl_lights_eval (check_float_node). */
 SHL_TEST(grid_nodes_equal_direct_evaluation)
 {
     shl_ctx *ctx;
@@ -106,11 +107,9 @@ SHL_TEST(grid_nodes_equal_direct_evaluation)
     two_lights_set(&s);
     const double lo[3] = {-1.0, -0.8, -0.5}, hi[3] = {1.2, 0.9, 1.0};
     const int res[3] = {3, 4, 5};
-    shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE), *gf = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
+    shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
     CHECK(shl_grid_fill(gd, s.set, 1) == SHL_OK);
-    CHECK(shl_grid_fill(gf, s.set, 2) == SHL_OK);
-    int bad = 0, bad_f = 0;
-    double worst = 0.0;
+    int bad = 0;
     for (int k = 0; k < res[2]; ++k)
         for (int j = 0; j < res[1]; ++j)
             for (int i = 0; i < res[0]; ++i) {
@@ -122,13 +121,60 @@ SHL_TEST(grid_nodes_equal_direct_evaluation)
                 CHECK(shl_lights_eval(ctx, s.set, x, want, want_g) == SHL_OK);
                 CHECK(shl_grid_get_node(gd, idx, got, got_g) == SHL_OK);
                 bad += memcmp(got, want, sizeof got) != 0 || memcmp(got_g, want_g, sizeof got_g) != 0;
-                worst = fmax(worst, check_float_node(ctx, &s, gf, lo, hi, idx, &bad_f));
             }
-    CHECK(bad == 0 && bad_f == 0);
-    harness_note("float nodes: worst error / batch tolerance %.2f", worst);
+    CHECK(bad == 0);
+    for (int t = 0; t < NISA; ++t) {
+        shl_ctx *ictx = isa_ctx(isas[t], LMAX);
+        if (!ictx) continue;
+        shl_grid *gf = new_grid(ictx, lo, hi, res, SHL_GRID_FLOAT);
+        CHECK(shl_grid_fill(gf, s.set, 2) == SHL_OK);
+        int bad_f = 0;
+        double worst = 0.0;
+        for (int n = 0; n < res[0] * res[1] * res[2]; ++n) {
+            const int idx[3] = {n % res[0], n / res[0] % res[1], n / res[0] / res[1]};
+            worst = fmax(worst, check_float_node(ictx, &s, gf, lo, hi, idx, &bad_f));
+        }
+        CHECK(bad_f == 0);
+        harness_note("%s float nodes: worst error / batch tolerance %.2f", isas[t], worst);
+        shl_grid_destroy(gf);
+        shl_ctx_destroy(ictx);
+    }
     shl_grid_destroy(gd);
-    shl_grid_destroy(gf);
     shl_lights_destroy(s.set);
+    shl_ctx_destroy(ctx);
+}
+
+/* Float grids off the float path (include/shlight.h): a box 1000 away from the
+ * origin with spacing 0.25 < 2^-10 x 1000 (float rounding would move nodes by up
+ * to 3e-5, 1.2e-4 of h), and one of spacing 2^-101: nodes are shl_lights_eval at
+ * the node position rounded to float, bit for bit, as double grids are. */
+SHL_TEST(grid_fill_float_off_batch_path)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l;
+    const double white[3] = {1.0, 0.5, 2.0}, c[3] = {1000.2, 0.5, 2.0};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l, c, 0.5, white) == SHL_OK);
+    const double lo[2][3] = {{1000.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}, hi[2][3] = {{1000.5, 1.0, 1.0}, {0x1p-100, 1.0, 1.0}};
+    const int res[3] = {3, 3, 3};
+    int bad = 0;
+    for (int b = 0; b < 2; ++b) {
+        shl_grid *g = new_grid(ctx, lo[b], hi[b], res, SHL_GRID_FLOAT);
+        CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+        for (int n = 0; n < 27; ++n) {
+            const int idx[3] = {n % 3, n / 3 % 3, n / 9};
+            double x[3], want[NV], want_g[NG], got[NV], got_g[NG];
+            CHECK(shl_grid_node_position(g, idx, x) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, l, x, want, want_g) == SHL_OK);
+            CHECK(shl_grid_get_node(g, idx, got, got_g) == SHL_OK);
+            for (int k = 0; k < NV; ++k) bad += got[k] != (double)(float)want[k];
+            for (int k = 0; k < NG; ++k) bad += got_g[k] != (double)(float)want_g[k];
+        }
+        shl_grid_destroy(g);
+    }
+    CHECK(bad == 0);
+    shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
 
