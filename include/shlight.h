@@ -637,9 +637,9 @@ int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int np
  * into fixed blocks (256 points for one polygon or sphere, 64 for a light set,
  * one for the double set), each evaluated by the same calls whatever the
  * thread count: results are bit for bit independent of nthreads.  Threads are
- * used up to the number of blocks; each allocates its own workspace (one
- * allocation of nthreads workspaces, rounded up to 64 bytes each).  The
- * context and the light set are only read.
+ * used up to the number of blocks, each with its own workspace, all in one
+ * allocation (the plain call's workspace, rounded up to 64 bytes, per thread;
+ * SHL_ENOMEM, nothing written).  The context and the light set are only read.
  */
 int shl_lights_eval_batch_mt(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts,
                              double *rgb, double *grad, int nthreads);
