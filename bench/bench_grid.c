@@ -3,19 +3,24 @@
  *  - Fig. 6: d/dx of (6,-3) and (7,2), analytic vs central differences,
  *  - cost of the analytic gradient vs coefficients only and vs finite differences,
  *  - Fig. 8: many lights on a heightfield, per-vertex analytic vs 8^3 grid + Hermite,
- *  - Fig. 9: grid resolution vs time and error; thread scaling of fill and interpolation.
+ *  - Fig. 9: grid resolution vs time and error; thread scaling of fill and interpolation,
+ *  - grid fill per node vs the float light-set batch per point (issue 17), 2 threads vs 1 on every
+ *    batch entry point.
  * All ratios come from one run; --help.  CSVs (dir: -d, default build/bench):
  *  <dir>/bench_grid_fig4.csv: the Fig. 4 curves, then the 10 samples with their d/dx;
  *  <dir>/bench_grid.csv: one row per table row, value1/value2 = fig4: max error, / max |L72|;
  *  fig6: max |analytic - FD|, relative; gradcost: grad/coeffs and FD/analytic time ratios;
  *  gradcost_set: s per light without/with gradients; fig8: per-vertex s, grid s;
- *  fig9: grid s, Hermite max error; threads: 1-thread s, 2-thread s. */
+ *  fig9: grid s, Hermite max error; threads: 1-thread s, 2-thread s;
+ *  fillrate: fill s per node, shl_lights_eval_batch_f s per point (16^3, gradients, 1 thread);
+ *  threads_batch: 1-thread s, 2-thread s of each batch entry point. */
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static FILE *csv;
 static shl_lights *subdivided_light(int nl);
@@ -446,20 +451,171 @@ static void many_lights(void)
     free(out);
 }
 
+/* ---- grid fill through the float batch; threads on every batch entry point ---- */
+
+/* Process CPU seconds: one-thread timings that other processes on the cores do not inflate. */
+static double cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Best of `reps` times of one call of fn(arg): wall clock, or CPU time if cpu. */
+static double best_of(void (*fn)(void *), void *arg, int reps, int cpu)
+{
+    double best = INFINITY;
+    for (int rep = 0; rep < reps; ++rep) {
+        const double t0 = cpu ? cpu_now() : bench_now();
+        fn(arg);
+        best = fmin(best, (cpu ? cpu_now() : bench_now()) - t0);
+    }
+    return best;
+}
+
+typedef struct {
+    const shl_ctx *ctx;
+    const shl_lights *l;
+    shl_grid *g;
+    int npts, nthreads;
+    const float *pts, *tri, *center;
+    float *rgb, *grad;
+    const double *dpts;
+    double *drgb, *dgrad;
+} fr_job;
+
+static void fr_fill(void *a) { const fr_job *j = a; must(shl_grid_fill(j->g, j->l, j->nthreads), "fill"); }
+static void fr_set_f(void *a)
+{
+    const fr_job *j = a;
+    must(shl_lights_eval_batch_f_mt(j->ctx, j->l, j->npts, j->pts, j->rgb, j->grad, j->nthreads), "batch_f");
+}
+static void fr_set_d(void *a)
+{
+    const fr_job *j = a;
+    must(shl_lights_eval_batch_mt(j->ctx, j->l, j->npts, j->dpts, j->drgb, j->dgrad, j->nthreads), "batch");
+}
+static void fr_poly(void *a)
+{
+    const fr_job *j = a;
+    must(shl_polygon_batch_f_mt(j->ctx, j->tri, 3, j->npts, j->pts, j->rgb, j->grad, j->nthreads), "polygon batch");
+}
+static void fr_sphere(void *a)
+{
+    const fr_job *j = a;
+    must(shl_sphere_batch_f_mt(j->ctx, j->center, 0.3f, j->npts, j->pts, j->rgb, j->grad, j->nthreads), "sphere batch");
+}
+
+/* Issue 17 target: a float grid's fill per node (gradients, 1 thread) <= 1.3x the
+ * float light-set batch with gradients per point, same lights, at the same points
+ * (the node positions rounded to float); then 2 threads vs 1 on every batch entry point. */
+static void fill_rate(void)
+{
+    enum { R = 16, NN = R * R * R };
+    double lo[3], hi[3];
+    free(heightfield(lo, hi));
+    const int r3[3] = {R, R, R};
+    float *pts = xmalloc(sizeof(float) * 3 * NN);
+    printf("\n## Grid fill per node vs the float light-set batch per point (16^3 float grid, gradients, one thread)\n\n"
+           "Same lights (the Fig. 8 rectangle as n triangles), same points (the %d node positions rounded to float);\n"
+           "process CPU time (one thread: not inflated by other processes), best of 5.  Target (issue 17):\n"
+           "fill / batch <= 1.3.\n\n"
+           "| lmax | lights | fill ns/node | shl_lights_eval_batch_f ns/point | fill / batch |\n|---|---|---|---|---|\n", NN);
+    const int lmaxes[2] = {4, 8}, nls[3] = {1, 8, 32};
+    for (int li = 0; li < 2; ++li) {
+        shl_ctx *ctx = new_ctx(lmaxes[li]);
+        const int nc = SHL_NCOEFFS(lmaxes[li]);
+        float *rgb = xmalloc(sizeof(float) * 3 * nc * NN), *grad = xmalloc(sizeof(float) * 9 * nc * NN);
+        for (int n = 0; n < 3; ++n) {
+            shl_lights *l = subdivided_light(nls[n]);
+            shl_grid *g;
+            must(shl_grid_create(ctx, lo, hi, r3, SHL_GRID_FLOAT, &g), "grid");
+            for (int i = 0; i < NN; ++i) {
+                const int idx[3] = {i % R, i / R % R, i / R / R};
+                double x[3];
+                must(shl_grid_node_position(g, idx, x), "node position");
+                for (int a = 0; a < 3; ++a) pts[3 * i + a] = (float)x[a];
+            }
+            fr_job j = {ctx, l, g, NN, 1, pts, NULL, NULL, rgb, grad, NULL, NULL, NULL};
+            const double tf = best_of(fr_fill, &j, 5, 1), tb = best_of(fr_set_f, &j, 5, 1);
+            bench_sink += rgb[0];
+            printf("| %d | %d | %.0f | %.0f | %.2f |\n", lmaxes[li], nls[n], tf / NN * 1e9, tb / NN * 1e9, tf / tb);
+            if (csv) fprintf(csv, "fillrate,lmax%d_lights%d,%d,%.6e,%.6e\n", lmaxes[li], nls[n], NN, tf / NN, tb / NN);
+            shl_grid_destroy(g);
+            shl_lights_destroy(l);
+        }
+        free(rgb);
+        free(grad);
+        shl_ctx_destroy(ctx);
+    }
+
+    enum { NP = 1 << 15, ND = 2000, TL = 8 };
+    shl_ctx *ctx = new_ctx(TL);
+    const int nc = SHL_NCOEFFS(TL);
+    shl_lights *l = subdivided_light(8);
+    float *bp = xmalloc(sizeof(float) * 3 * NP), *rgb = xmalloc(sizeof(float) * 3 * nc * NP),
+          *grad = xmalloc(sizeof(float) * 9 * nc * NP);
+    double *dp = xmalloc(sizeof(double) * 3 * ND), *drgb = xmalloc(sizeof(double) * 3 * nc * ND),
+           *dgrad = xmalloc(sizeof(double) * 9 * nc * ND);
+    for (int i = 0; i < NP; ++i) {
+        bp[3 * i] = (float)(-1.0 + 2.0 * (i % 181) / 180.0);
+        bp[3 * i + 1] = (float)(-1.0 + 2.0 * (i / 181 % 181) / 180.0);
+        bp[3 * i + 2] = (float)(0.1 * (i % 7));
+    }
+    for (int i = 0; i < 3 * ND; ++i) dp[i] = bp[i];
+    const float tri[9] = {-0.8f, -0.8f, 1.0f, -0.8f, 0.8f, 1.0f, 0.8f, 0.8f, 1.0f}, center[3] = {0.0f, 0.0f, 1.5f};
+    shl_grid *g;
+    const int r32[3] = {32, 32, 32};
+    must(shl_grid_create(ctx, lo, hi, r32, SHL_GRID_FLOAT, &g), "grid");
+    printf("\n## Threads on every batch entry point (lmax %d, gradients, 8 triangle lights for the sets; wall clock,\n"
+           "best of 3: meaningful only on an idle machine)\n\n"
+           "| entry point | points | 1 thread ms | 2 threads ms | speed-up |\n|---|---|---|---|---|\n", TL);
+    struct {
+        const char *name;
+        void (*fn)(void *);
+        int npts;
+    } eps[5] = {{"shl_polygon_batch_f_mt", fr_poly, NP},
+                {"shl_sphere_batch_f_mt", fr_sphere, NP},
+                {"shl_lights_eval_batch_f_mt", fr_set_f, NP / 4},
+                {"shl_lights_eval_batch_mt (double)", fr_set_d, ND},
+                {"shl_grid_fill (32^3 float)", fr_fill, 32 * 32 * 32}};
+    for (int e = 0; e < 5; ++e) {
+        fr_job j = {ctx, l, g, eps[e].npts, 1, bp, tri, center, rgb, grad, dp, drgb, dgrad};
+        const double t1 = best_of(eps[e].fn, &j, 3, 0);
+        j.nthreads = 2;
+        const double t2 = best_of(eps[e].fn, &j, 3, 0);
+        printf("| %s | %d | %.2f | %.2f | %.2fx |\n", eps[e].name, eps[e].npts, t1 * 1e3, t2 * 1e3, t1 / t2);
+        if (csv) fprintf(csv, "threads_batch,%s,%d,%.6e,%.6e\n", eps[e].name, eps[e].npts, t1, t2);
+    }
+    bench_sink += rgb[0] + drgb[0];
+    shl_grid_destroy(g);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+    free(pts);
+    free(bp);
+    free(rgb);
+    free(grad);
+    free(dp);
+    free(drgb);
+    free(dgrad);
+}
+
 int main(int argc, char **argv)
 {
-    const char *dir = "build/bench";
-    const bench_opt opts[] = {{"-d", "--dir", "DIR", &dir, "directory of the two CSV files (default build/bench)"}};
+    const char *dir = "build/bench", *only = NULL;
+    const bench_opt opts[] = {{"-d", "--dir", "DIR", &dir, "directory of the two CSV files (default build/bench)"},
+                              {"-f", "--fill-rate", NULL, &only, "only the fill-rate and batch-thread tables (~15 s)"}};
     const bench_cli cli = {
         "bench_grid", "[-d DIR]",
         "Gradients, sparse grids and interpolation (Wu et al. 2020, Sec. 6-7): Fig. 4 (coefficient (7,2)\n"
         "along a line, trilinear / Taylor / Hermite from 10 samples), Fig. 6 (analytic gradients vs central\n"
         "differences), the cost of the analytic gradient, Fig. 8 (many lights: per-vertex analytic vs an\n"
-        "8^3 grid + Hermite) and Fig. 9 (grid resolution vs time and error; thread scaling).\n"
+        "8^3 grid + Hermite) and Fig. 9 (grid resolution vs time and error; thread scaling), then the grid\n"
+        "fill per node against the float light-set batch per point and 2 threads vs 1 on every batch entry point.\n"
         "About 1 minute on a 2-core machine; progress on stderr.\n"
         "Writes Markdown tables to stdout, DIR/bench_grid.csv (one row per table row) and\n"
         "DIR/bench_grid_fig4.csv (the Fig. 4 curves and samples).",
-        opts, 1, 0};
+        opts, 2, 0};
     bench_parse(&cli, argc, argv, NULL);
     char path[512];
     snprintf(path, sizeof path, "%s/bench_grid.csv", dir);
@@ -476,14 +632,18 @@ int main(int argc, char **argv)
         fclose(la);
     }
     printf("Load average at start (other processes share the 2 cores): %s\n", load);
-    bench_progress("Fig. 4, interpolation along a line (step 1/4)...");
-    fig4(dir);
-    bench_progress("Fig. 6, gradients vs finite differences (step 2/4)...");
-    fig6();
-    bench_progress("cost of the analytic gradient (step 3/4)...");
-    grad_cost();
-    bench_progress("Figs. 8-9, many lights, grid resolution, threads (step 4/4)...");
-    many_lights();
+    if (!only) {
+        bench_progress("Fig. 4, interpolation along a line (step 1/5)...");
+        fig4(dir);
+        bench_progress("Fig. 6, gradients vs finite differences (step 2/5)...");
+        fig6();
+        bench_progress("cost of the analytic gradient (step 3/5)...");
+        grad_cost();
+        bench_progress("Figs. 8-9, many lights, grid resolution, threads (step 4/5)...");
+        many_lights();
+    }
+    bench_progress("grid fill vs the float batch, threads on the batch entry points (step 5/5)...");
+    fill_rate();
     printf("\n(total %.0f s; checksum %g)\n", bench_now() - t0, (double)bench_sink);
     if (fclose(csv)) return 1;
     bench_progress("done; wrote %s and %s/bench_grid_fig4.csv", path, dir);

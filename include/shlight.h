@@ -187,11 +187,23 @@ int shl_grid_get_node(const shl_grid *grid, const int idx[3], double *rgb, doubl
 /** Write node idx from rgb[3*nc] and grad[9*nc] (finite; rounded to float storage). */
 int shl_grid_set_node(shl_grid *grid, const int idx[3], const double *rgb, const double *grad);
 /**
- * Set every node to shl_lights_eval of the light set at its position (Wu 2020
- * Alg. 1 lines 2-8), on 1 <= nthreads <= SHL_MAX_THREADS threads (1: the calling
- * thread only, no thread is created); the result does not depend on nthreads.
- * It also records which lights meet the box (shl_grid_lights_in_box).
- * SHL_ETHREAD if a thread cannot be created (the grid is then unchanged).
+ * Set every node to the light set's coefficients and gradients at its position
+ * (Wu 2020 Alg. 1 lines 2-8), on 1 <= nthreads <= SHL_MAX_THREADS threads (1: the
+ * calling thread only, no thread is created); the result does not depend on
+ * nthreads, bit for bit.  It also records which lights meet the box
+ * (shl_grid_lights_in_box).  SHL_ETHREAD if a thread cannot be created (the grid
+ * is then unchanged).
+ * Double grids: every node is shl_lights_eval at shl_grid_node_position, bit for bit.
+ * Float grids: nodes go in blocks of 64 (in node order) through the float SIMD
+ * light-set batch, gradients included: every node is, bit for bit,
+ * shl_lights_eval_batch_f at its position rounded to float, so its error against
+ * shl_lights_eval is that batch's (per light, its batch tolerance times |rgb|,
+ * plus the float sum: README "Batch evaluation and SIMD") plus the move of the
+ * position by the rounding, at most 2^-24 max(|lo[a]|, |hi[a]|) per axis (times
+ * the gradient).  That path is taken when every axis has max(|lo[a]|, |hi[a]|)
+ * <= 2^126 and a spacing h[a] >= 2^-10 max(|lo[a]|, |hi[a]|) and >= 2^-100 (the
+ * rounding then moves a node by at most 2^-14 h[a]); other float grids take the
+ * double path, rounded to float.
  */
 int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads);
 
@@ -614,6 +626,29 @@ int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, 
  */
 int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
                             float *grad);
+
+/**
+ * Threaded batches: the four batch entry points above on 1 <= nthreads <=
+ * SHL_MAX_THREADS threads (as shl_grid_fill: 1 runs on the calling thread and
+ * creates none; the plain entry points are these with nthreads = 1).  Same
+ * arguments, semantics and errors otherwise, plus nthreads outside 1..SHL_MAX_THREADS:
+ * SHL_EDOMAIN, and SHL_ETHREAD if a thread cannot be created (all threads are
+ * created before any work starts: nothing is written).  The points are split
+ * into fixed blocks (256 points for one polygon or sphere, 64 for a light set,
+ * one for the double set), each evaluated by the same calls whatever the
+ * thread count: results are bit for bit independent of nthreads.  Threads are
+ * used up to the number of blocks, each with its own workspace, all in one
+ * allocation (the plain call's workspace, rounded up to 64 bytes, per thread;
+ * SHL_ENOMEM, nothing written).  The context and the light set are only read.
+ */
+int shl_lights_eval_batch_mt(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts,
+                             double *rgb, double *grad, int nthreads);
+int shl_lights_eval_batch_f_mt(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts,
+                               float *rgb, float *grad, int nthreads);
+int shl_polygon_batch_f_mt(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
+                           float *coeffs, float *grad, int nthreads);
+int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
+                          float *coeffs, float *grad, int nthreads);
 
 /**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with

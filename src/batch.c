@@ -4,6 +4,7 @@
  * for the rare points its float geometry cannot resolve.  Light sets
  * (src/lights_batch.c) run the same two steps per polygon. */
 #include "../simd/batch.h"
+#include "parallel.h"
 #include "polygon.h"
 #include <float.h>
 #include <math.h>
@@ -122,12 +123,31 @@ void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const do
             shl__batch_poly_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
 }
 
-int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
-                        float *coeffs, float *grad)
+typedef struct {
+    const shl_ctx *ctx;
+    const shl__batch_poly *P;
+    const double *verts;
+    int n, npts;
+    const float *pts;
+    float *coeffs, *grad;
+    char *ws; /* per worker: stride bytes of kernel workspace */
+    size_t stride;
+} poly_job;
+
+static void poly_range(void *arg, int worker, long begin, long end)
+{
+    const poly_job *job = arg;
+    const size_t nc = (size_t)job->ctx->nc, p0 = (size_t)begin;
+    shl__batch_poly_eval(job->ctx, job->P, job->verts, job->n, (int)(end - begin), job->pts + 3 * p0,
+                         job->coeffs + nc * p0, job->grad ? job->grad + 3 * nc * p0 : NULL, job->ws + job->stride * (size_t)worker);
+}
+
+int shl_polygon_batch_f_mt(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts, float *coeffs,
+                           float *grad, int nthreads)
 {
     if (!ctx || !verts || (npts > 0 && (!pts || !coeffs))) return SHL_ENULL;
     if (n < 3 || n > SHL_MAX_VERTS) return SHL_ENVERTS;
-    if (npts < 0) return SHL_EDOMAIN;
+    if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
     if (shl__check_finite_f(verts, 3 * n)) return SHL_ENONFINITE;
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
@@ -136,9 +156,17 @@ int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts,
     for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
     shl__batch_poly P;
     shl__batch_poly_prepare(vd, n, &P);
-    void *work = shl__malloc(ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL));
-    if (!work) return SHL_ENOMEM;
-    shl__batch_poly_eval(ctx, &P, vd, n, npts, pts, coeffs, grad, work);
-    shl__free(work);
-    return SHL_OK;
+    /* blocks of SHL__BATCH_BLOCK points (the last may be shorter), the same for every thread count */
+    const int nw = shl__parallel_workers(npts, SHL__BATCH_BLOCK, nthreads);
+    poly_job job = {ctx, &P, vd, n, npts, pts, coeffs, grad, NULL, shl__ws_stride(ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL))};
+    if (!(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM;
+    const int st = shl__parallel_for(npts, SHL__BATCH_BLOCK, nw, poly_range, &job); /* SHL_ETHREAD: nothing written */
+    shl__free(job.ws);
+    return st;
+}
+
+int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,
+                        float *coeffs, float *grad)
+{
+    return shl_polygon_batch_f_mt(ctx, verts, n, npts, pts, coeffs, grad, 1);
 }

@@ -1,5 +1,7 @@
 /* Regular grids of RGB SH coefficients and gradients over a box, filled from
- * a light set (Wu et al. 2020, Alg. 1 lines 2-8), in parallel over nodes. */
+ * a light set (Wu et al. 2020, Alg. 1 lines 2-8), in parallel: float grids in
+ * blocks of nodes through the float SIMD light-set batch (lights_batch.c),
+ * double grids node by node through shl__lights_eval. */
 #include "grid.h"
 #include "lights.h"
 #include "parallel.h"
@@ -137,23 +139,69 @@ int shl_grid_set_node(shl_grid *grid, const int idx[3], const double *rgb, const
 typedef struct {
     shl_grid *g;
     const shl_lights *lights;
-    double *ws;      /* per worker: node_len doubles of output, then the light workspace */
-    size_t ws_len;
+    shl_ctx ctx;     /* the grid's lmax and batch kernels */
+    char *ws;        /* per worker: stride bytes of workspace */
+    size_t stride;
 } fill_job;
 
+static void node_index(const shl_grid *g, long node, int idx[3])
+{
+    idx[0] = (int)(node % g->res[0]);
+    idx[1] = (int)(node / g->res[0] % g->res[1]);
+    idx[2] = (int)(node / g->res[0] / g->res[1]);
+}
+
+/* Double path, per node: shl__lights_eval, stored (rounded) in the grid's type. */
 static void fill_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
     shl_grid *g = job->g;
-    double *out = job->ws + (size_t)worker * job->ws_len, *lws = out + g->node_len;
+    double *out = (double *)(job->ws + job->stride * (size_t)worker), *lws = out + g->node_len;
     for (long node = begin; node < end; ++node) {
-        const int idx[3] = {(int)(node % g->res[0]), (int)(node / g->res[0] % g->res[1]),
-                            (int)(node / g->res[0] / g->res[1])};
+        int idx[3];
         double x[3];
+        node_index(g, node, idx);
         shl__grid_node_pos(g, idx, x);
         shl__lights_eval(job->lights, g->lmax, lws, x, out, out + 3 * g->nc); /* Wu 2020 Alg. 1 l. 5-7 */
         store(g, (size_t)node * g->node_len, out, g->node_len);
     }
+}
+
+/* Float path, per block of SHL__LIGHTS_BLOCK nodes: the float light-set batch at
+ * the node positions rounded to float, written straight into the nodes (values
+ * and gradients, stride node_len: the layout of shl_lights_eval). */
+static void fill_range_f(void *arg, int worker, long begin, long end)
+{
+    const fill_job *job = arg;
+    shl_grid *g = job->g;
+    void *buf = job->ws ? job->ws + job->stride * (size_t)worker : NULL;
+    float pts[3 * SHL__LIGHTS_BLOCK];
+    for (long b = begin; b < end; ++b) {
+        const long n0 = b * SHL__LIGHTS_BLOCK, left = (long)g->nnodes - n0;
+        const int m = left < SHL__LIGHTS_BLOCK ? (int)left : SHL__LIGHTS_BLOCK;
+        for (int j = 0; j < m; ++j) {
+            int idx[3];
+            double x[3];
+            node_index(g, n0 + j, idx);
+            shl__grid_node_pos(g, idx, x);
+            for (int a = 0; a < 3; ++a) pts[3 * j + a] = (float)x[a];
+        }
+        float *node = (float *)g->data + (size_t)n0 * g->node_len;
+        shl__lights_batch_f_block(&job->ctx, job->lights, m, pts, node, g->node_len, node + 3 * g->nc, g->node_len,
+                                  buf); /* Wu 2020 Alg. 1 l. 5-7 */
+    }
+}
+
+/* Float path when rounding the node positions to float keeps them finite and
+ * moves them by at most 2^-24 max(|lo|, |hi|) <= 2^-14 h per axis (include/shlight.h). */
+static int float_path(const shl_grid *g)
+{
+    if (g->storage != SHL_GRID_FLOAT) return 0;
+    for (int a = 0; a < 3; ++a) {
+        const double m = fmax(fabs(g->lo[a]), fabs(g->hi[a]));
+        if (!(m <= 0x1p126 && g->h[a] >= 0x1p-10 * m && g->h[a] >= 0x1p-100)) return 0;
+    }
+    return 1;
 }
 
 /* ---- lights meeting the box (closed sets, decided in floating point) ---- */
@@ -303,15 +351,17 @@ int shl_grid_fill(shl_grid *grid, const shl_lights *lights, int nthreads)
         if (!box) return SHL_ENOMEM;
         classify_lights(grid, lights, box);
     }
-    const long n = (long)grid->nnodes, grain = 1;
-    const int nw = shl__parallel_workers(n, grain, nthreads);
-    fill_job job = {grid, lights, NULL, grid->node_len + shl__lights_ws_size(grid->lmax)};
-    job.ws = shl__malloc(sizeof(double) * job.ws_len * (size_t)nw);
-    if (!job.ws) {
+    const int batch = float_path(grid);
+    const long n = batch ? ((long)grid->nnodes + SHL__LIGHTS_BLOCK - 1) / SHL__LIGHTS_BLOCK : (long)grid->nnodes;
+    const int nw = shl__parallel_workers(n, 1, nthreads);
+    fill_job job = {grid, lights, {grid->lmax, grid->nc, grid->isa}, NULL, 0};
+    job.stride = batch ? shl__ws_stride(shl__lights_batch_f_bytes(&job.ctx, lights, 1))
+                       : shl__ws_stride(sizeof(double) * (grid->node_len + shl__lights_ws_size(grid->lmax)));
+    if (job.stride > 0 && !(job.ws = shl__malloc(job.stride * (size_t)nw))) {
         shl__free(box);
         return SHL_ENOMEM;
     }
-    const int st = shl__parallel_for(n, grain, nw, fill_range, &job);
+    const int st = shl__parallel_for(n, 1, nw, batch ? fill_range_f : fill_range, &job); /* SHL_ETHREAD: nothing written */
     shl__free(job.ws);
     if (st) {
         shl__free(box);

@@ -266,20 +266,3 @@ int shl_lights_eval(const shl_ctx *ctx, const shl_lights *lights, const double x
     shl__free(ws);
     return SHL_OK;
 }
-
-int shl_lights_eval_batch(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts,
-                          double *rgb, double *grad)
-{
-    int st = check_eval(ctx, lights, pts, rgb);
-    if (st) return st;
-    if (npts < 0) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
-    double *ws = shl__malloc(sizeof(double) * shl__lights_ws_size(ctx->lmax));
-    if (!ws) return SHL_ENOMEM;
-    const size_t nc = (size_t)ctx->nc;
-    for (int p = 0; p < npts; ++p)
-        shl__lights_eval(lights, ctx->lmax, ws, pts + 3 * (size_t)p, rgb + 3 * nc * p, grad ? grad + 9 * nc * p : NULL);
-    shl__free(ws);
-    return SHL_OK;
-}

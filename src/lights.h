@@ -38,4 +38,18 @@ size_t shl__lights_ws_size(int lmax);
 void shl__lights_eval(const shl_lights *lights, int lmax, double *ws, const double x[3],
                       double *rgb, double *grad);
 
+/* Float light-set batch (lights_batch.c), shared with the grid fill: points go
+ * in blocks of at most SHL__LIGHTS_BLOCK, each block through the same calls
+ * whatever the thread count (results bit for bit independent of it). */
+enum { SHL__LIGHTS_BLOCK = 64 }; /* a multiple of every vector length */
+
+/* Bytes of one worker's buffer for shl__lights_batch_f_block (0 for an empty set). */
+size_t shl__lights_batch_f_bytes(const shl_ctx *ctx, const shl_lights *lights, int with_grad);
+
+/* The set at m <= SHL__LIGHTS_BLOCK finite float points: point j writes
+ * rgb + j*rgb_stride (3 nc floats) and, if grad != NULL, grad + j*grad_stride
+ * (9 nc), overwriting them; buf: shl__lights_batch_f_bytes bytes (NULL if 0). */
+void shl__lights_batch_f_block(const shl_ctx *ctx, const shl_lights *lights, int m, const float *pts, float *rgb,
+                               size_t rgb_stride, float *grad, size_t grad_stride, void *buf);
+
 #endif

@@ -5,13 +5,16 @@
  * light's rgb, into their outputs.  The ZH -> SH reconstruction is not shared
  * across lights as in shl__lights_eval: in the kernel it is 13% of the time at
  * lmax 8 (bench/RESULTS.md sec. 4), the per-light SH accumulation it would
- * replace costs about as much as the lobe-domain one. */
+ * replace costs about as much as the lobe-domain one.  Threads take whole
+ * blocks of SHL__LIGHTS_BLOCK points, so a point's result never depends on the
+ * thread count.  The double batch shl_lights_eval_batch is here too. */
 #include "../simd/batch.h"
 #include "lights.h"
+#include "parallel.h"
 #include <math.h>
 #include <string.h>
 
-enum { CHUNK = 64 }; /* points per pass over the lights: a multiple of every vector length */
+enum { CHUNK = SHL__LIGHTS_BLOCK }; /* points per pass over the lights */
 
 /* Double vertices the polygon kernel takes: coordinates up to 2^126 and an extent
  * of at least 2^-126, so that the scaled vertices and points (times at most 2^126)
@@ -48,53 +51,138 @@ static void light_batch(const shl_ctx *ctx, const shl_lights *lights, const shl_
     shl__batch_poly_eval(ctx, &P, v, li->n, m, pts, coeffs, grad, work);
 }
 
-int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
-                            float *grad)
+static size_t kernel_bytes(const shl_ctx *ctx, int with_grad)
+{
+    const size_t pb = ctx->isa->poly_work_bytes(ctx->lmax, with_grad), sb = ctx->isa->sphere_work_bytes(ctx->lmax, with_grad);
+    return pb > sb ? pb : sb;
+}
+
+size_t shl__lights_batch_f_bytes(const shl_ctx *ctx, const shl_lights *lights, int with_grad)
+{
+    if (lights->count == 0) return 0;
+    const size_t nq = with_grad ? 4 : 1; /* kernel workspace, then the block's unit-radiance outputs and gathered points */
+    return kernel_bytes(ctx, with_grad) + sizeof(float) * (nq * (size_t)ctx->nc + 3) * CHUNK;
+}
+
+void shl__lights_batch_f_block(const shl_ctx *ctx, const shl_lights *lights, int m, const float *pts, float *rgb,
+                               size_t rgb_stride, float *grad, size_t grad_stride, void *buf)
+{
+    const size_t nc = (size_t)ctx->nc, nq = grad ? 4 : 1;
+    for (int j = 0; j < m; ++j) {
+        memset(rgb + rgb_stride * j, 0, sizeof(float) * 3 * nc);
+        if (grad) memset(grad + grad_stride * j, 0, sizeof(float) * 9 * nc);
+    }
+    if (lights->count == 0) return;
+    float *unit = (float *)((char *)buf + kernel_bytes(ctx, grad != NULL)), *gathered = unit + nq * nc * CHUNK;
+    float *ugrad = grad ? unit + nc * CHUNK : NULL;
+    int index[CHUNK];
+    for (int i = 0; i < lights->count; ++i) {
+        const shl__light *li = &lights->items[i];
+        int k = 0;
+        for (int j = 0; j < m; ++j) {
+            const float *pt = pts + 3 * (size_t)j;
+            if (!li->two_sided) {
+                const double x[3] = {pt[0], pt[1], pt[2]};
+                if (!(shl__light_front_distance(li, lights->verts + li->vofs, x) > 0.0)) continue;
+            }
+            memcpy(gathered + 3 * k, pt, sizeof(float) * 3);
+            index[k++] = j;
+        }
+        if (k == 0) continue;
+        light_batch(ctx, lights, li, k, gathered, unit, ugrad, buf);
+        for (int j = 0; j < k; ++j) /* Wu 2020 Alg. 1 line 7: the lights add linearly */
+            for (int c = 0; c < 3; ++c) {
+                const float s = (float)li->rgb[c];
+                ctx->isa->accumulate(nc, s, unit + nc * j, rgb + rgb_stride * (size_t)index[j] + c * nc);
+                if (grad) /* layout (c*3 + a)*nc + k */
+                    ctx->isa->accumulate(3 * nc, s, ugrad + 3 * nc * j, grad + grad_stride * (size_t)index[j] + 3 * c * nc);
+            }
+    }
+}
+
+typedef struct {
+    const shl_ctx *ctx;
+    const shl_lights *lights;
+    long npts;
+    const float *pts;
+    float *rgb, *grad;
+    char *ws; /* per worker: stride bytes (NULL for an empty set) */
+    size_t stride;
+} batch_f_job;
+
+static void batch_f_range(void *arg, int worker, long begin, long end)
+{
+    const batch_f_job *job = arg;
+    const size_t nc = (size_t)job->ctx->nc;
+    void *buf = job->ws ? job->ws + job->stride * (size_t)worker : NULL;
+    for (long b = begin; b < end; ++b) {
+        const size_t p0 = (size_t)b * CHUNK;
+        const int m = job->npts - (long)p0 < CHUNK ? (int)(job->npts - (long)p0) : CHUNK;
+        shl__lights_batch_f_block(job->ctx, job->lights, m, job->pts + 3 * p0, job->rgb + 3 * nc * p0, 3 * nc,
+                                  job->grad ? job->grad + 9 * nc * p0 : NULL, 9 * nc, buf);
+    }
+}
+
+int shl_lights_eval_batch_f_mt(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
+                               float *grad, int nthreads)
 {
     if (!ctx || !lights || (npts > 0 && (!pts || !rgb))) return SHL_ENULL;
-    if (npts < 0) return SHL_EDOMAIN;
+    if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
-    const size_t nc = (size_t)ctx->nc, nq = grad ? 4 : 1;
-    const size_t kernel_bytes = ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL),
-                 sphere_bytes = ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL);
-    const size_t work_bytes = kernel_bytes > sphere_bytes ? kernel_bytes : sphere_bytes;
-    /* kernel workspace, then the chunk's unit-radiance outputs and gathered points */
-    float *buf = NULL;
-    if (lights->count > 0 && !(buf = shl__malloc(work_bytes + sizeof(float) * (nq * nc + 3) * CHUNK)))
-        return SHL_ENOMEM; /* before anything is written */
-    memset(rgb, 0, sizeof(float) * 3 * nc * (size_t)npts);
-    if (grad) memset(grad, 0, sizeof(float) * 9 * nc * (size_t)npts);
-    if (!buf) return SHL_OK; /* empty set */
-    float *unit = (float *)((char *)buf + work_bytes), *gathered = unit + nq * nc * CHUNK;
-    int index[CHUNK];
-    for (int p0 = 0; p0 < npts; p0 += CHUNK) {
-        const int nchunk = npts - p0 < CHUNK ? npts - p0 : CHUNK;
-        for (int i = 0; i < lights->count; ++i) {
-            const shl__light *li = &lights->items[i];
-            int m = 0;
-            for (int j = 0; j < nchunk; ++j) {
-                const float *pt = pts + 3 * (size_t)(p0 + j);
-                if (!li->two_sided) {
-                    const double x[3] = {pt[0], pt[1], pt[2]};
-                    if (!(shl__light_front_distance(li, lights->verts + li->vofs, x) > 0.0)) continue;
-                }
-                memcpy(gathered + 3 * m, pt, sizeof(float) * 3);
-                index[m++] = p0 + j;
-            }
-            if (m == 0) continue;
-            float *ugrad = grad ? unit + nc * CHUNK : NULL;
-            light_batch(ctx, lights, li, m, gathered, unit, ugrad, buf);
-            for (int j = 0; j < m; ++j) /* Wu 2020 Alg. 1 line 7: the lights add linearly */
-                for (int c = 0; c < 3; ++c) {
-                    const float s = (float)li->rgb[c];
-                    ctx->isa->accumulate(nc, s, unit + nc * j, rgb + (3 * (size_t)index[j] + c) * nc);
-                    if (grad) /* layout (c*3 + a)*nc + k */
-                        ctx->isa->accumulate(3 * nc, s, ugrad + 3 * nc * j, grad + (9 * (size_t)index[j] + 3 * c) * nc);
-                }
-        }
-    }
-    shl__free(buf);
-    return SHL_OK;
+    const long nblocks = (npts + CHUNK - 1) / CHUNK;
+    const int nw = shl__parallel_workers(nblocks, 1, nthreads);
+    batch_f_job job = {ctx, lights, npts, pts, rgb, grad, NULL, shl__ws_stride(shl__lights_batch_f_bytes(ctx, lights, grad != NULL))};
+    if (job.stride > 0 && !(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM; /* before anything is written */
+    const int st = shl__parallel_for(nblocks, 1, nw, batch_f_range, &job); /* SHL_ETHREAD: nothing written */
+    shl__free(job.ws);
+    return st;
+}
+
+int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
+                            float *grad)
+{
+    return shl_lights_eval_batch_f_mt(ctx, lights, npts, pts, rgb, grad, 1);
+}
+
+/* ---- double: shl__lights_eval per point ---- */
+
+typedef struct {
+    const shl_lights *lights;
+    int lmax;
+    const double *pts;
+    double *rgb, *grad, *ws; /* ws: per worker, shl__lights_ws_size(lmax) doubles */
+} batch_job;
+
+static void batch_range(void *arg, int worker, long begin, long end)
+{
+    const batch_job *job = arg;
+    const size_t nc = (size_t)SHL_NCOEFFS(job->lmax);
+    double *ws = job->ws + shl__lights_ws_size(job->lmax) * (size_t)worker;
+    for (long p = begin; p < end; ++p)
+        shl__lights_eval(job->lights, job->lmax, ws, job->pts + 3 * (size_t)p, job->rgb + 3 * nc * (size_t)p,
+                         job->grad ? job->grad + 9 * nc * (size_t)p : NULL);
+}
+
+int shl_lights_eval_batch_mt(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts, double *rgb,
+                             double *grad, int nthreads)
+{
+    if (!ctx || !lights || !pts || !rgb) return SHL_ENULL;
+    if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    const int nw = shl__parallel_workers(npts, 1, nthreads);
+    batch_job job = {lights, ctx->lmax, pts, rgb, grad, NULL};
+    job.ws = shl__malloc(sizeof(double) * shl__lights_ws_size(ctx->lmax) * (size_t)nw);
+    if (!job.ws) return SHL_ENOMEM;
+    const int st = shl__parallel_for(npts, 1, nw, batch_range, &job); /* SHL_ETHREAD: nothing written */
+    shl__free(job.ws);
+    return st;
+}
+
+int shl_lights_eval_batch(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts, double *rgb,
+                          double *grad)
+{
+    return shl_lights_eval_batch_mt(ctx, lights, npts, pts, rgb, grad, 1);
 }

@@ -1,4 +1,4 @@
-/* One parallel loop on pthreads (grid fill, batch interpolation). */
+/* One parallel loop on pthreads (grid fill, batch interpolation, the batch entry points). */
 #ifndef SHL_PARALLEL_H
 #define SHL_PARALLEL_H
 
@@ -16,5 +16,15 @@ int shl__parallel_workers(long n, long grain, int nthreads);
  * work starts: if a creation fails, the started threads exit without calling
  * fn, are joined, and SHL_ETHREAD is returned (fn never ran). */
 int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg);
+
+/* Points per block of the single-light batch entry points (batch.c, sphere_batch.c):
+ * a multiple of every vector length, so that blocks split no vector. */
+enum { SHL__BATCH_BLOCK = 256 };
+
+/* Stride of per-worker scratch slices of `bytes` in one allocation (64-byte multiples). */
+static inline size_t shl__ws_stride(size_t bytes) { return (bytes + 63) / 64 * 64; }
+
+/* Argument check of the threaded entry points: 1 <= nthreads <= SHL_MAX_THREADS. */
+static inline int shl__check_threads(int nthreads) { return nthreads < 1 || nthreads > SHL_MAX_THREADS; }
 
 #endif

@@ -2,6 +2,7 @@
  * (simd/sphere_batch.h) over all points.  Light sets (src/lights_batch.c)
  * share shl__batch_sphere_eval. */
 #include "../simd/batch.h"
+#include "parallel.h"
 #include "sh_ops.h"
 #include <math.h>
 
@@ -37,20 +38,46 @@ void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double r
     }
 }
 
-int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
-                       float *coeffs, float *grad)
+typedef struct {
+    const shl_ctx *ctx;
+    double center[3], radius;
+    const float *pts;
+    float *coeffs, *grad;
+    char *ws; /* per worker: stride bytes of kernel workspace */
+    size_t stride;
+} sphere_job;
+
+static void sphere_range(void *arg, int worker, long begin, long end)
+{
+    const sphere_job *job = arg;
+    const size_t nc = (size_t)job->ctx->nc, p0 = (size_t)begin;
+    shl__batch_sphere_eval(job->ctx, job->center, job->radius, (int)(end - begin), job->pts + 3 * p0,
+                           job->coeffs + nc * p0, job->grad ? job->grad + 3 * nc * p0 : NULL,
+                           job->ws + job->stride * (size_t)worker);
+}
+
+int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
+                          float *coeffs, float *grad, int nthreads)
 {
     if (!ctx || !center || (npts > 0 && (!pts || !coeffs))) return SHL_ENULL;
-    if (npts < 0) return SHL_EDOMAIN;
+    if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
     if (shl__check_finite_f(center, 3) || !isfinite(radius)) return SHL_ENONFINITE;
     if (!(radius > 0.0f)) return SHL_EDOMAIN;
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
-    void *work = shl__malloc(ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL));
-    if (!work) return SHL_ENOMEM;
-    const double c[3] = {center[0], center[1], center[2]};
-    shl__batch_sphere_eval(ctx, c, radius, npts, pts, coeffs, grad, work);
-    shl__free(work);
-    return SHL_OK;
+    /* blocks of SHL__BATCH_BLOCK points (the last may be shorter), the same for every thread count */
+    const int nw = shl__parallel_workers(npts, SHL__BATCH_BLOCK, nthreads);
+    sphere_job job = {ctx, {center[0], center[1], center[2]}, radius, pts, coeffs, grad, NULL,
+                      shl__ws_stride(ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL))};
+    if (!(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM;
+    const int st = shl__parallel_for(npts, SHL__BATCH_BLOCK, nw, sphere_range, &job); /* SHL_ETHREAD: nothing written */
+    shl__free(job.ws);
+    return st;
+}
+
+int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
+                       float *coeffs, float *grad)
+{
+    return shl_sphere_batch_f_mt(ctx, center, radius, npts, pts, coeffs, grad, 1);
 }

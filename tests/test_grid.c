@@ -1,9 +1,11 @@
 /* SH grids: fill against direct evaluation, thread independence, exactness of
  * the three interpolants on polynomial fields, accuracy on a real light field
  * (Wu 2020 Fig. 4 setup), clamping, bad input, allocation and thread failures. */
+#include "batch_tol.h"
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
+#include "isa_ctx.h"
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -16,15 +18,62 @@ enum { LMAX = 4, NC = SHL_NCOEFFS(LMAX), NV = 3 * NC, NG = 9 * NC };
 
 static const double quad_light[12] = {-1.0, -0.5, 1.5, 1.0, -0.5, 1.5, 1.0, 0.5, 1.5, -1.0, 0.5, 1.5};
 
+/* The set of two_lights(), with the copies batch_tol.h needs for its tolerances. */
+static void two_lights_set(light_set *s)
+{
+    const double tri[9] = {0.5, 1.0, 2.0, 1.5, 1.2, 1.8, 0.8, 1.9, 2.2}, rgb1[3] = {1.0, 0.8, 0.6}, rgb2[3] = {0.2, 0.4, 3.0};
+    memset(s, 0, sizeof *s);
+    CHECK(shl_lights_create(&s->set) == SHL_OK);
+    add_polygon(s, quad_light, 4, rgb1, 0); /* faces +z: lights z > 1.5 only */
+    add_polygon(s, quad_light, 4, rgb2, 1);
+    add_polygon(s, tri, 3, rgb2, 1);
+}
+
 static shl_lights *two_lights(void)
 {
-    shl_lights *l;
-    const double tri[9] = {0.5, 1.0, 2.0, 1.5, 1.2, 1.8, 0.8, 1.9, 2.2}, rgb1[3] = {1.0, 0.8, 0.6}, rgb2[3] = {0.2, 0.4, 3.0};
-    CHECK(shl_lights_create(&l) == SHL_OK);
-    CHECK(shl_lights_add_polygon(l, quad_light, 4, rgb1, 0) == SHL_OK); /* faces +z: lights z > 1.5 only */
-    CHECK(shl_lights_add_polygon(l, quad_light, 4, rgb2, 1) == SHL_OK);
-    CHECK(shl_lights_add_polygon(l, tri, 3, rgb2, 1) == SHL_OK);
-    return l;
+    static light_set s;
+    two_lights_set(&s);
+    return s.set;
+}
+
+/* Float grid node idx against the float batch and the double reference (the
+ * contract of shl_grid_fill for float grids, include/shlight.h): the node equals
+ * shl_lights_eval_batch_f at its position x rounded to float, bit for bit (*bad
+ * counts mismatches), and lies within the derived batch tolerance (batch_tol.h)
+ * of shl_lights_eval at that rounded position; the rounding moves x by at most
+ * 2^-24 max(|lo[a]|, |hi[a]|) per axis.  Returns the worst error / tolerance. */
+static double check_float_node(const shl_ctx *ctx, const light_set *s, const shl_grid *gf, const double lo[3],
+                               const double hi[3], const int idx[3], int *bad)
+{
+    const int nc = SHL_NCOEFFS(shl_ctx_lmax(ctx));
+    double x[3], xr[3], got[3 * NCMAX], got_g[9 * NCMAX], ref[3 * NCMAX], ref_g[9 * NCMAX], tc[3], tg[3];
+    float xf[3], bf[3 * NCMAX], bg[9 * NCMAX];
+    CHECK(shl_grid_node_position(gf, idx, x) == SHL_OK);
+    for (int a = 0; a < 3; ++a) {
+        xf[a] = (float)x[a];
+        xr[a] = xf[a];
+        CHECK(fabs(xr[a] - x[a]) <= 0x1p-24 * fmax(fabs(lo[a]), fabs(hi[a])));
+    }
+    CHECK(shl_grid_get_node(gf, idx, got, got_g) == SHL_OK);
+    CHECK(shl_lights_eval_batch_f(ctx, s->set, 1, xf, bf, bg) == SHL_OK);
+    for (int k = 0; k < 3 * nc; ++k) *bad += got[k] != (double)bf[k];
+    for (int k = 0; k < 9 * nc; ++k) *bad += got_g[k] != (double)bg[k];
+    CHECK(shl_lights_eval(ctx, s->set, xr, ref, ref_g) == SHL_OK);
+    tolerances(ctx, s, xr, tc, tg);
+    double worst = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        double ec = 0.0, eg = 0.0;
+        for (int k = 0; k < nc; ++k) ec = fmax(ec, fabs(got[c * nc + k] - ref[c * nc + k]));
+        for (int k = 0; k < 3 * nc; ++k) eg = fmax(eg, fabs(got_g[3 * c * nc + k] - ref_g[3 * c * nc + k]));
+        /* nothing reaches x in this channel (tolerance 0): exact zeros */
+        const double rc = tc[c] > 0.0 ? ec / tc[c] : (ec == 0.0 ? 0.0 : HUGE_VAL);
+        const double rg = tg[c] > 0.0 ? eg / tg[c] : (eg == 0.0 ? 0.0 : HUGE_VAL);
+        if (!(rc <= 1.0 && rg <= 1.0))
+            harness_fail(__FILE__, __LINE__, "float node (%d, %d, %d) colour %d: coeffs %.3g (tol %.3g), grad %.3g (tol %.3g)",
+                         idx[0], idx[1], idx[2], c, ec, tc[c], eg, tg[c]);
+        worst = fmax(worst, fmax(rc, rg));
+    }
+    return worst;
 }
 
 static shl_grid *new_grid(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3], int storage)
@@ -46,17 +95,20 @@ SHL_TEST(grid_bytes_per_node)
     harness_note("lmax 4 float: %d bytes/node; lmax 8 double: %d", bf, bd);
 }
 
-/* Every node holds shl_lights_eval at its position: bit for bit in double, rounded in float. */
+/* Every node of a double grid holds shl_lights_eval at its position, bit for
+ * bit; every node of a float grid, for every ISA this machine runs, the float
+ * batch at its position rounded to float, bit for bit, within the batch
+ * tolerance of shl_lights_eval (check_float_node). */
 SHL_TEST(grid_nodes_equal_direct_evaluation)
 {
     shl_ctx *ctx;
     CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
-    shl_lights *l = two_lights();
+    light_set s;
+    two_lights_set(&s);
     const double lo[3] = {-1.0, -0.8, -0.5}, hi[3] = {1.2, 0.9, 1.0};
     const int res[3] = {3, 4, 5};
-    shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE), *gf = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
-    CHECK(shl_grid_fill(gd, l, 1) == SHL_OK);
-    CHECK(shl_grid_fill(gf, l, 2) == SHL_OK);
+    shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE);
+    CHECK(shl_grid_fill(gd, s.set, 1) == SHL_OK);
     int bad = 0;
     for (int k = 0; k < res[2]; ++k)
         for (int j = 0; j < res[1]; ++j)
@@ -66,16 +118,62 @@ SHL_TEST(grid_nodes_equal_direct_evaluation)
                 CHECK(shl_grid_node_position(gd, idx, x) == SHL_OK);
                 for (int a = 0; a < 3; ++a)
                     CHECK(x[a] == (idx[a] == res[a] - 1 ? hi[a] : lo[a] + idx[a] * (hi[a] - lo[a]) / (res[a] - 1)));
-                CHECK(shl_lights_eval(ctx, l, x, want, want_g) == SHL_OK);
+                CHECK(shl_lights_eval(ctx, s.set, x, want, want_g) == SHL_OK);
                 CHECK(shl_grid_get_node(gd, idx, got, got_g) == SHL_OK);
                 bad += memcmp(got, want, sizeof got) != 0 || memcmp(got_g, want_g, sizeof got_g) != 0;
-                CHECK(shl_grid_get_node(gf, idx, got, got_g) == SHL_OK);
-                for (int c = 0; c < NV; ++c) bad += got[c] != (double)(float)want[c];
-                for (int c = 0; c < NG; ++c) bad += got_g[c] != (double)(float)want_g[c];
             }
     CHECK(bad == 0);
+    for (int t = 0; t < NISA; ++t) {
+        shl_ctx *ictx = isa_ctx(isas[t], LMAX);
+        if (!ictx) continue;
+        shl_grid *gf = new_grid(ictx, lo, hi, res, SHL_GRID_FLOAT);
+        CHECK(shl_grid_fill(gf, s.set, 2) == SHL_OK);
+        int bad_f = 0;
+        double worst = 0.0;
+        for (int n = 0; n < res[0] * res[1] * res[2]; ++n) {
+            const int idx[3] = {n % res[0], n / res[0] % res[1], n / res[0] / res[1]};
+            worst = fmax(worst, check_float_node(ictx, &s, gf, lo, hi, idx, &bad_f));
+        }
+        CHECK(bad_f == 0);
+        harness_note("%s float nodes: worst error / batch tolerance %.2f", isas[t], worst);
+        shl_grid_destroy(gf);
+        shl_ctx_destroy(ictx);
+    }
     shl_grid_destroy(gd);
-    shl_grid_destroy(gf);
+    shl_lights_destroy(s.set);
+    shl_ctx_destroy(ctx);
+}
+
+/* Float grids off the float path (include/shlight.h): a box 1000 away from the
+ * origin with spacing 0.25 < 2^-10 x 1000 (float rounding would move nodes by up
+ * to 3e-5, 1.2e-4 of h), and one of spacing 2^-101: nodes are shl_lights_eval at
+ * the node position rounded to float, bit for bit, as double grids are. */
+SHL_TEST(grid_fill_float_off_batch_path)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *l;
+    const double white[3] = {1.0, 0.5, 2.0}, c[3] = {1000.2, 0.5, 2.0};
+    CHECK(shl_lights_create(&l) == SHL_OK);
+    CHECK(shl_lights_add_sphere(l, c, 0.5, white) == SHL_OK);
+    const double lo[2][3] = {{1000.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}, hi[2][3] = {{1000.5, 1.0, 1.0}, {0x1p-100, 1.0, 1.0}};
+    const int res[3] = {3, 3, 3};
+    int bad = 0;
+    for (int b = 0; b < 2; ++b) {
+        shl_grid *g = new_grid(ctx, lo[b], hi[b], res, SHL_GRID_FLOAT);
+        CHECK(shl_grid_fill(g, l, 2) == SHL_OK);
+        for (int n = 0; n < 27; ++n) {
+            const int idx[3] = {n % 3, n / 3 % 3, n / 9};
+            double x[3], want[NV], want_g[NG], got[NV], got_g[NG];
+            CHECK(shl_grid_node_position(g, idx, x) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, l, x, want, want_g) == SHL_OK);
+            CHECK(shl_grid_get_node(g, idx, got, got_g) == SHL_OK);
+            for (int k = 0; k < NV; ++k) bad += got[k] != (double)(float)want[k];
+            for (int k = 0; k < NG; ++k) bad += got_g[k] != (double)(float)want_g[k];
+        }
+        shl_grid_destroy(g);
+    }
+    CHECK(bad == 0);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
@@ -94,30 +192,37 @@ static int grids_equal(const shl_grid *a, const shl_grid *b, const int res[3])
     return 1;
 }
 
+/* Float: 693 nodes, 11 blocks of the float fill, the last one partial; double:
+ * 120 nodes (threads take single nodes).  Any thread count gives the 1-thread
+ * grid bit for bit. */
 SHL_TEST(grid_fill_threads_bit_identical)
 {
     shl_ctx *ctx;
     CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
     shl_lights *l = two_lights();
     const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
-    const int res[3] = {5, 4, 6};
-    shl_grid *ref = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
-    CHECK(shl_grid_fill(ref, l, 1) == SHL_OK);
-    const int threads[4] = {2, 3, 8, SHL_MAX_THREADS};
-    for (int t = 0; t < 4; ++t) {
-        shl_grid *g = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
-        CHECK(shl_grid_fill(g, l, threads[t]) == SHL_OK);
-        CHECK(grids_equal(ref, g, res));
-        shl_grid_destroy(g);
+    for (int storage = 0; storage < 2; ++storage) {
+        const int st = storage ? SHL_GRID_DOUBLE : SHL_GRID_FLOAT;
+        const int res[3] = {storage ? 5 : 9, storage ? 4 : 7, storage ? 6 : 11};
+        shl_grid *ref = new_grid(ctx, lo, hi, res, st);
+        CHECK(shl_grid_fill(ref, l, 1) == SHL_OK);
+        const int threads[4] = {2, 3, 8, SHL_MAX_THREADS};
+        for (int t = 0; t < 4; ++t) {
+            shl_grid *g = new_grid(ctx, lo, hi, res, st);
+            CHECK(shl_grid_fill(g, l, threads[t]) == SHL_OK);
+            CHECK(grids_equal(ref, g, res));
+            shl_grid_destroy(g);
+        }
+        shl_grid_destroy(ref);
     }
-    shl_grid_destroy(ref);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
 
 /* Polygons and spheres (one overlapping the box, so some nodes lie inside it):
  * every node holds shl_lights_eval (bit for bit in double) = the sum of
- * rgb x shl_polygon_grad and rgb x shl_sphere_grad; the three interpolants
+ * rgb x shl_polygon_grad and rgb x shl_sphere_grad; float nodes are the float
+ * batch's (check_float_node); the three interpolants
  * return the node values at the nodes; threads do not change the fill. */
 SHL_TEST(grid_fill_mixed_set_with_spheres)
 {
@@ -125,19 +230,21 @@ SHL_TEST(grid_fill_mixed_set_with_spheres)
     CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
     const double tri[9] = {0.5, 1.0, 2.0, 1.5, 1.2, 1.8, 0.8, 1.9, 2.2}, prgb[2][3] = {{1.0, 0.8, 0.6}, {0.2, 0.4, 3.0}};
     const double sc[2][3] = {{0.4, -0.3, 0.2}, {-1.0, 0.5, 3.0}}, sr[2] = {0.45, 0.7}, srgb[2][3] = {{2.0, 1.0, 0.5}, {0.3, -0.2, 1.5}};
-    shl_lights *l;
-    CHECK(shl_lights_create(&l) == SHL_OK);
-    CHECK(shl_lights_add_sphere(l, sc[0], sr[0], srgb[0]) == SHL_OK);
-    CHECK(shl_lights_add_polygon(l, quad_light, 4, prgb[0], 1) == SHL_OK);
-    CHECK(shl_lights_add_sphere(l, sc[1], sr[1], srgb[1]) == SHL_OK);
-    CHECK(shl_lights_add_polygon(l, tri, 3, prgb[1], 1) == SHL_OK);
+    light_set s;
+    memset(&s, 0, sizeof s);
+    CHECK(shl_lights_create(&s.set) == SHL_OK);
+    add_sphere(&s, sc[0], sr[0], srgb[0]);
+    add_polygon(&s, quad_light, 4, prgb[0], 1);
+    add_sphere(&s, sc[1], sr[1], srgb[1]);
+    add_polygon(&s, tri, 3, prgb[1], 1);
+    shl_lights *l = s.set;
     const double lo[3] = {-1.0, -0.8, -0.5}, hi[3] = {1.2, 0.9, 1.0};
     const int res[3] = {5, 4, 6};
     shl_grid *gd = new_grid(ctx, lo, hi, res, SHL_GRID_DOUBLE), *gf = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
     CHECK(shl_grid_fill(gd, l, 3) == SHL_OK);
     CHECK(shl_grid_fill(gf, l, 1) == SHL_OK);
     int bad = 0, inside = 0;
-    double ev = 0.0, eg = 0.0, enode = 0.0;
+    double ev = 0.0, eg = 0.0, enode = 0.0, worst_f = 0.0;
     for (int k = 0; k < res[2]; ++k)
         for (int j = 0; j < res[1]; ++j)
             for (int i = 0; i < res[0]; ++i) {
@@ -147,9 +254,7 @@ SHL_TEST(grid_fill_mixed_set_with_spheres)
                 CHECK(shl_lights_eval(ctx, l, x, direct, direct_g) == SHL_OK);
                 CHECK(shl_grid_get_node(gd, idx, got, got_g) == SHL_OK);
                 bad += memcmp(got, direct, sizeof got) != 0 || memcmp(got_g, direct_g, sizeof got_g) != 0;
-                CHECK(shl_grid_get_node(gf, idx, got, got_g) == SHL_OK);
-                for (int c = 0; c < NV; ++c) bad += got[c] != (double)(float)direct[c];
-                for (int c = 0; c < NG; ++c) bad += got_g[c] != (double)(float)direct_g[c];
+                worst_f = fmax(worst_f, check_float_node(ctx, &s, gf, lo, hi, idx, &bad));
                 /* the sum of the parts */
                 for (int p = 0; p < 4; ++p) {
                     double co[NC], gr[3 * NC];
@@ -185,8 +290,8 @@ SHL_TEST(grid_fill_mixed_set_with_spheres)
     shl_grid *g2 = new_grid(ctx, lo, hi, res, SHL_GRID_FLOAT);
     CHECK(shl_grid_fill(g2, l, 8) == SHL_OK);
     CHECK(grids_equal(gf, g2, res));
-    harness_note("%d nodes (%d inside a sphere): vs sum of parts coeffs %.1e, grads %.1e; interp at nodes %.1e", res[0] * res[1] * res[2],
-                 inside, ev, eg, enode);
+    harness_note("%d nodes (%d inside a sphere): vs sum of parts coeffs %.1e, grads %.1e; interp at nodes %.1e; "
+                 "float nodes worst error / batch tolerance %.2f", res[0] * res[1] * res[2], inside, ev, eg, enode, worst_f);
     shl_grid_destroy(g2);
     shl_grid_destroy(gd);
     shl_grid_destroy(gf);
@@ -585,7 +690,8 @@ SHL_TEST(grid_bad_input)
 /* Every allocation (create: 2, fill: 2, the lights' box flags and the workspace)
  * fails in turn; every thread creation of a 4-thread fill and interpolation fails
  * in turn: SHL_ENOMEM / SHL_ETHREAD, outputs untouched (nodes and box flags),
- * nothing leaked (ASan), the grid still usable. */
+ * nothing leaked (ASan), the grid still usable.  The threaded fill runs on a
+ * 12 x 12 x 3 grid: 7 blocks of 64 nodes (float fill), so 4 threads are made. */
 SHL_TEST(grid_alloc_and_thread_failures)
 {
     shl_ctx *ctx;
@@ -621,7 +727,8 @@ SHL_TEST(grid_alloc_and_thread_failures)
     CHECK(nomem == 4);
 
     shl_grid *g = NULL;
-    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
+    const int res_t[3] = {12, 12, 3};
+    CHECK(shl_grid_create(ctx, lo, hi, res_t, SHL_GRID_FLOAT, &g) == SHL_OK);
     int ethread = 0;
     for (long fail = 0; fail < 3; ++fail) {
         shl__thread_fail_after = fail;
@@ -629,9 +736,14 @@ SHL_TEST(grid_alloc_and_thread_failures)
         shl__thread_fail_after = -1;
         CHECK(st == SHL_ETHREAD);
         ethread += st == SHL_ETHREAD;
-        double v[N2];
-        int nin = -1;
-        CHECK(shl_grid_get_node(g, idx, v, NULL) == SHL_OK && v[0] == 0.0);
+        double v[N2], vg[3 * N2];
+        int nin = -1, written = 0; /* every node, values and gradients, still 0 */
+        for (int n = 0; n < res_t[0] * res_t[1] * res_t[2]; ++n) {
+            const int ni[3] = {n % res_t[0], n / res_t[0] % res_t[1], n / res_t[0] / res_t[1]};
+            CHECK(shl_grid_get_node(g, ni, v, vg) == SHL_OK);
+            for (int k = 0; k < N2; ++k) written += v[k] != 0.0 || vg[k] != 0.0 || vg[N2 + k] != 0.0 || vg[2 * N2 + k] != 0.0;
+        }
+        CHECK(written == 0);
         CHECK(shl_grid_lights_in_box(g, SHL_GRID_NEAR_BOX, 0, NULL, &nin) == SHL_OK && nin == 0);
     }
     CHECK(shl_grid_fill(g, l, 4) == SHL_OK);

@@ -2,18 +2,8 @@
  * every ISA this machine runs, against the scalar double reference
  * shl_lights_eval on the float-rounded points.
  *
- * Tolerance: the set's result is the sum over lights of rgb_c times each
- * light's unit-radiance result, so its error is at most the sum of the lights'
- * own errors times |rgb_c|, plus the float summation (n lights x FLT_EPSILON x
- * sum |terms|, |L_lm| <= sqrt(2l+1) |L00|: < 4e-6 sum |rgb| |L00| for the 8
- * lights and lmax <= 30 here, well inside the per-light tolerances).  Each
- * light's error is bounded by the tolerance its own batch test states:
- * polygons (test_simd.c) 2e-5 + 4e-5/theta of |L00| and 1e-4 + 5e-5/theta of
- * max|grad| (theta = sqrt(solid angle)), spheres (test_simd_sphere_interp.c)
- * 2e-5 |L00| and 1e-5 max|grad| up to lmax 14, 1.5e-4 and 3e-5 above.  Per
- * light, |L00| and max|grad| come from shl_polygon_grad / shl_sphere_grad in
- * double.  The floor 16 FLT_MIN per light
- * admits results below float range (the gradient of a light 1e100 away). */
+ * Tolerance: the derived batch tolerance of tests/batch_tol.h. */
+#include "batch_tol.h"
 #include "geom.h"
 #include "isa_ctx.h"
 #include "testutil.h"
@@ -23,75 +13,7 @@
 
 extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
 
-enum { MAXLIGHTS = 12, MAXPTS = 150, NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
-
-/* A light set and a copy of what went into it (for the per-light scales). */
-typedef struct {
-    shl_lights *set;
-    int count, n[MAXLIGHTS], two_sided[MAXLIGHTS], sphere[MAXLIGHTS];
-    double v[MAXLIGHTS][3 * SHL_MAX_VERTS], rgb[MAXLIGHTS][3], center[MAXLIGHTS][3], radius[MAXLIGHTS];
-} light_set;
-
-static void add_polygon(light_set *s, const double *v, int n, const double rgb[3], int two_sided)
-{
-    const int i = s->count++;
-    CHECK(shl_lights_add_polygon(s->set, v, n, rgb, two_sided) == SHL_OK);
-    memcpy(s->v[i], v, sizeof(double) * 3 * n);
-    memcpy(s->rgb[i], rgb, sizeof(double) * 3);
-    s->n[i] = n;
-    s->two_sided[i] = two_sided;
-    s->sphere[i] = 0;
-}
-
-static void add_sphere(light_set *s, const double center[3], double radius, const double rgb[3])
-{
-    const int i = s->count++;
-    CHECK(shl_lights_add_sphere(s->set, center, radius, rgb) == SHL_OK);
-    memcpy(s->center[i], center, sizeof(double) * 3);
-    memcpy(s->rgb[i], rgb, sizeof(double) * 3);
-    s->radius[i] = radius;
-    s->sphere[i] = 1;
-}
-
-/* Per-colour tolerances tc[c], tg[c] at x: the sum over lights reaching x of
- * |rgb_c| times the light's tolerance (see the top of the file). */
-static void tolerances(const shl_ctx *ctx, const light_set *s, const double x[3], double tc[3], double tg[3])
-{
-    const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax);
-    static double c[NCMAX], g[3 * NCMAX];
-    for (int k = 0; k < 3; ++k) tc[k] = tg[k] = 0.0;
-    for (int i = 0; i < s->count; ++i) {
-        double ct, gt;
-        if (s->sphere[i]) {
-            CHECK(shl_sphere_grad(ctx, x, s->center[i], s->radius[i], c, g) == SHL_OK);
-            ct = lmax <= 14 ? 2e-5 : 1.5e-4;
-            gt = lmax <= 14 ? 1e-5 : 3e-5;
-        } else {
-            double omega, nrm[3] = {0, 0, 0};
-            const double *v = s->v[i];
-            for (int j = 1; j + 1 < s->n[i]; ++j) { /* Newell normal, fan from v_0 */
-                const double e[3] = {v[3 * j] - v[0], v[3 * j + 1] - v[1], v[3 * j + 2] - v[2]};
-                const double f[3] = {v[3 * j + 3] - v[0], v[3 * j + 4] - v[1], v[3 * j + 5] - v[2]};
-                nrm[0] += e[1] * f[2] - e[2] * f[1];
-                nrm[1] += e[2] * f[0] - e[0] * f[2];
-                nrm[2] += e[0] * f[1] - e[1] * f[0];
-            }
-            const double front = nrm[0] * (x[0] - v[0]) + nrm[1] * (x[1] - v[1]) + nrm[2] * (x[2] - v[2]);
-            if (!s->two_sided[i] && !(front > 0.0)) continue;
-            CHECK(shl_polygon_grad(ctx, x, v, s->n[i], c, g) == SHL_OK);
-            CHECK(shl_polygon_solid_angle(x, v, s->n[i], &omega) == SHL_OK);
-            if (omega == 0.0) continue;
-            ct = 2e-5 + 4e-5 / sqrt(omega);
-            gt = 1e-4 + 5e-5 / sqrt(omega);
-        }
-        double gmax = 0.0;
-        for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(g[k]));
-        for (int k = 0; k < 3; ++k) {
-            tc[k] += fabs(s->rgb[i][k]) * (ct * fabs(c[0]) + 16.0 * FLT_MIN);
-            tg[k] += fabs(s->rgb[i][k]) * (gt * gmax + 16.0 * FLT_MIN);
-        }
-    }
-}
+enum { MAXPTS = 150 };
 
 /* The batch against shl_lights_eval at every point; returns the worst error / tolerance. */
 static double check_set(const shl_ctx *ctx, const light_set *s, const float *pts, int npts, const char *what)

@@ -1,6 +1,7 @@
 /* One shl_ctx shared by several threads evaluating at once gives results
  * identical (bit for bit) to single-threaded evaluation.  Run under
- * ThreadSanitizer by `make SANITIZE=thread test-threads`. */
+ * ThreadSanitizer by `make SANITIZE=thread test-threads`.  The threaded batch
+ * entry points (*_mt) equal their plain calls bit for bit for any thread count. */
 #include "geom.h"
 #include "harness.h"
 #include "shlight.h"
@@ -60,4 +61,129 @@ SHL_TEST(threads_shared_ctx_bit_identical)
     for (int t = 0; t < started; ++t)
         CHECK(memcmp(parallel_out[t], serial, sizeof serial) == 0);
     shl_ctx_destroy(ctx);
+}
+
+/* ---- threaded batch entry points (the *_mt calls) ---- */
+
+extern long shl__thread_fail_after; /* src/parallel.c, built with SHL_ALLOC_HOOKS */
+
+enum { BL = 4, BNC = SHL_NCOEFFS(BL), NS = 1000, NL = 300, ND = 40 }; /* NS: 4 blocks of 256; NL: 5 blocks of 64 */
+
+typedef struct {
+    shl_ctx *ctx;
+    shl_lights *set;
+    float tri[9], center[3], radius, spts[3 * NS], lpts[3 * NL];
+    double dpts[3 * ND];
+} batch_case;
+
+static void batch_case_init(batch_case *b)
+{
+    CHECK(shl_ctx_create(BL, &b->ctx) == SHL_OK);
+    CHECK(shl_lights_create(&b->set) == SHL_OK);
+    const double tri[9] = {-1.0, -0.5, 1.0, 1.0, -0.25, 1.25, 0.0, 1.0, 0.75}, c[3] = {0.5, -1.0, -2.0};
+    const double rgb1[3] = {1.0, 0.5, 2.0}, rgb2[3] = {0.3, 1.0, -0.5};
+    CHECK(shl_lights_add_polygon(b->set, tri, 3, rgb1, 0) == SHL_OK);
+    CHECK(shl_lights_add_sphere(b->set, c, 0.4, rgb2) == SHL_OK);
+    for (int k = 0; k < 9; ++k) b->tri[k] = (float)tri[k];
+    for (int k = 0; k < 3; ++k) b->center[k] = (float)c[k];
+    b->radius = 0.4f;
+    rng_t r = {2026};
+    for (int i = 0; i < 3 * NS; ++i) b->spts[i] = (float)rng_range(&r, -0.5, 0.5);
+    for (int i = 0; i < 3 * NL; ++i) b->lpts[i] = (float)rng_range(&r, -0.5, 0.5);
+    for (int i = 0; i < 3 * ND; ++i) b->dpts[i] = rng_range(&r, -0.5, 0.5);
+}
+
+static void batch_case_free(batch_case *b)
+{
+    shl_lights_destroy(b->set);
+    shl_ctx_destroy(b->ctx);
+}
+
+/* Entry point e (0: polygon, 1: sphere, 2: float set, 3: double set) on nthreads
+ * threads (0: the plain call), with gradients or not; outputs as bytes. */
+static int run_batch(const batch_case *b, int e, int nthreads, int with_grad, void *out, void *grad)
+{
+    float *fo = out, *fg = with_grad ? grad : NULL;
+    double *dout = out, *dg = with_grad ? grad : NULL;
+    switch (e) {
+    case 0:
+        return nthreads ? shl_polygon_batch_f_mt(b->ctx, b->tri, 3, NS, b->spts, fo, fg, nthreads)
+                        : shl_polygon_batch_f(b->ctx, b->tri, 3, NS, b->spts, fo, fg);
+    case 1:
+        return nthreads ? shl_sphere_batch_f_mt(b->ctx, b->center, b->radius, NS, b->spts, fo, fg, nthreads)
+                        : shl_sphere_batch_f(b->ctx, b->center, b->radius, NS, b->spts, fo, fg);
+    case 2:
+        return nthreads ? shl_lights_eval_batch_f_mt(b->ctx, b->set, NL, b->lpts, fo, fg, nthreads)
+                        : shl_lights_eval_batch_f(b->ctx, b->set, NL, b->lpts, fo, fg);
+    default:
+        return nthreads ? shl_lights_eval_batch_mt(b->ctx, b->set, ND, b->dpts, dout, dg, nthreads)
+                        : shl_lights_eval_batch(b->ctx, b->set, ND, b->dpts, dout, dg);
+    }
+}
+
+/* value bytes of entry point e (its gradients take three times as many) */
+static size_t out_bytes(int e)
+{
+    const size_t per = e < 2 ? sizeof(float) * BNC : e == 2 ? sizeof(float) * 3 * BNC : sizeof(double) * 3 * BNC;
+    return per * (size_t)(e < 2 ? NS : e == 2 ? NL : ND);
+}
+
+static unsigned char ref_v[sizeof(double) * 3 * BNC * ND + sizeof(float) * BNC * NS]; /* >= every out_bytes(e) */
+static unsigned char ref_g[3 * sizeof ref_v], got_v[sizeof ref_v + 64], got_g[sizeof ref_g + 64];
+
+/* Every entry point on 1, 2, 3, 8 and SHL_MAX_THREADS threads, with and without
+ * gradients, equals its plain call bit for bit (several blocks, the last partial),
+ * and writes nothing past its outputs. */
+SHL_TEST(threads_batch_mt_bit_identical)
+{
+    batch_case b;
+    batch_case_init(&b);
+    const int threads[5] = {1, 2, 3, 8, SHL_MAX_THREADS};
+    int bad = 0;
+    for (int e = 0; e < 4; ++e)
+        for (int wg = 0; wg < 2; ++wg) {
+            const size_t nv = out_bytes(e), ng = 3 * nv;
+            CHECK(run_batch(&b, e, 0, wg, ref_v, ref_g) == SHL_OK);
+            for (int t = 0; t < 5; ++t) {
+                memset(got_v, 0xA5, nv + 64);
+                memset(got_g, 0xA5, ng + 64);
+                CHECK(run_batch(&b, e, threads[t], wg, got_v, got_g) == SHL_OK);
+                bad += memcmp(got_v, ref_v, nv) != 0 || (wg && memcmp(got_g, ref_g, ng) != 0);
+                for (int k = 0; k < 64; ++k) bad += got_v[nv + k] != 0xA5 || got_g[(wg ? ng : 0) + k] != 0xA5;
+            }
+        }
+    CHECK(bad == 0);
+    batch_case_free(&b);
+}
+
+/* nthreads outside 1..SHL_MAX_THREADS: SHL_EDOMAIN; each thread creation of a
+ * 4-thread call failing in turn: SHL_ETHREAD and nothing written; then the call
+ * succeeds with the plain call's results. */
+SHL_TEST(threads_batch_mt_failures)
+{
+    batch_case b;
+    batch_case_init(&b);
+    int ethread = 0, bad = 0;
+    for (int e = 0; e < 4; ++e) {
+        const size_t nv = out_bytes(e), ng = 3 * nv;
+        CHECK(run_batch(&b, e, 0, 1, ref_v, ref_g) == SHL_OK);
+        memset(got_v, 0xA5, nv);
+        memset(got_g, 0xA5, ng);
+        CHECK(run_batch(&b, e, -1, 1, got_v, got_g) == SHL_EDOMAIN);
+        CHECK(run_batch(&b, e, SHL_MAX_THREADS + 1, 1, got_v, got_g) == SHL_EDOMAIN);
+        for (long fail = 0; fail < 3; ++fail) {
+            shl__thread_fail_after = fail;
+            const int st = run_batch(&b, e, 4, 1, got_v, got_g);
+            shl__thread_fail_after = -1;
+            CHECK(st == SHL_ETHREAD);
+            ethread += st == SHL_ETHREAD;
+            for (size_t k = 0; k < nv; ++k) bad += got_v[k] != 0xA5;
+            for (size_t k = 0; k < ng; ++k) bad += got_g[k] != 0xA5;
+        }
+        CHECK(run_batch(&b, e, 4, 1, got_v, got_g) == SHL_OK);
+        bad += memcmp(got_v, ref_v, nv) != 0 || memcmp(got_g, ref_g, ng) != 0;
+    }
+    CHECK(bad == 0 && ethread == 12);
+    harness_note("%d thread-creation failures handled, nothing written", ethread);
+    batch_case_free(&b);
 }

@@ -11,8 +11,23 @@
  *    non-finite, nthreads outside 1..256, bad method, taylor_b non-finite or
  *    <= 0, npts < 0, SHL_ENOMEM under injected failures); nothing written on
  *    error (the grid keeps its nodes when fill fails);
- *  - every node equals shl_lights_eval at shl_grid_node_position, rounded to the
- *    storage type (bit for bit); the last node of an axis is exactly hi;
+ *  - double grids, and float grids outside the float path: every node equals
+ *    shl_lights_eval at shl_grid_node_position, rounded to the storage type (bit for
+ *    bit); the last node of an axis is exactly hi;
+ *  - float grids on the float path (every axis: max(|lo|, |hi|) <= 2^126, spacing
+ *    h >= 2^-10 max(|lo|, |hi|) and >= 2^-100; include/shlight.h): every node equals
+ *    shl_lights_eval_batch_f at its position rounded to float (moved by at most
+ *    2^-24 max(|lo|, |hi|)), bit for bit, and, when every light is a structured
+ *    polygon with float-exact vertices or a sphere not within 1e-6 r of the node,
+ *    lies within the batch slack of shl_lights_eval at that rounded position:
+ *    per band l, sum_i |rgb_i| e_il + 4 eps_f sum_i |rgb_i| B_il, where e_il is light
+ *    i's float-batch slack (polygons: fuzz_batch.c's, which holds for the light
+ *    set's polygon path because it prepares the same double vertices; spheres: 1e-4
+ *    of K_0 2 pi t, five times test_simd_sphere_interp.c's 2e-5 |L00|, plus the
+ *    conditioning dt, du of fuzz_sphere.c; gradients 1e-4 of the moving-boundary
+ *    bound, ten times that test's 1e-5) and the last term the float sum of at most
+ *    3 lights and the rounding of rgb to float (B_il: K_l 4 pi for values, the
+ *    gradient bound for gradients);
  *  - interpolation outputs are finite when the nodes are;
  *  - trilinear values lie within [min, max] of the cell's corner values (checked
  *    against all nodes), up to 1e-12 relative;
@@ -67,6 +82,75 @@ static long double grad_bound(const double x[3], int lmax)
 }
 
 static int node_count(const int res[3]) { return res[0] * res[1] * res[2]; }
+
+/* Float grids: the float batch path of shl_grid_fill (include/shlight.h). */
+static int float_path(const double lo[3], const double hi[3], const int res[3])
+{
+    for (int a = 0; a < 3; ++a) {
+        const double m = fmax(fabs(lo[a]), fabs(hi[a])), h = (hi[a] - lo[a]) / (res[a] - 1);
+        if (!(m <= 0x1p126 && h >= 0x1p-10 * m && h >= 0x1p-100)) return 0;
+    }
+    return 1;
+}
+
+/* Slack of a float-path node at the float-rounded position x against shl_lights_eval
+ * there, per band l: sc[l] for coefficients, sg[l] for gradients (see the top of the
+ * file).  Returns 0 when a light is outside the bounded cases. */
+static int float_node_slack(int lmax, const double x[3], long double *sc, long double *sg)
+{
+    const long double epsf = FLT_EPSILON, epsd = DBL_EPSILON, gb = grad_bound(x, lmax);
+    if (!(gb < 1e30L)) return 0;
+    for (int l = 0; l <= lmax; ++l) {
+        sc[l] = 0.0L;
+        sg[l] = 4.0L * epsf * gb;
+    }
+    for (int i = 0; i < ngl; ++i) {
+        const glight *li = &GL[i];
+        const long double w = li->rgbmax;
+        if (li->sphere) {
+            long double d2 = 0.0L, S = li->r;
+            for (int k = 0; k < 3; ++k) {
+                d2 += ((long double)li->c[k] - x[k]) * ((long double)li->c[k] - x[k]);
+                S = fmaxl(S, fmaxl(fabsl((long double)li->c[k]), fabsl((long double)x[k])));
+            }
+            const long double d = sqrtl(d2), r = li->r;
+            if (fabsl(d - r) <= 1e-6L * r) return 0;
+            for (int l = 0; l <= lmax; ++l) sc[l] += w * 4.0L * epsf * fz_kl(l) * 4.0L * M_PI;
+            if (d < r) continue; /* inside: sqrt(4 pi), zero elsewhere, in both */
+            const long double s = r / d, c = sqrtl((d - r) * (d + r)) / d, t = s * s / (1.0L + c);
+            const long double dt = 4.0L * epsd * S * s * s / (c * d), du = 4.0L * epsd * S / d;
+            for (int l = 0; l <= lmax; ++l) {
+                sc[l] += w * (1e-4L * fz_kl(0) * 2.0L * M_PI * t + fz_kl(l) * 2.0L * M_PI * (dt + t * (l + 1) * (l + 1) * du) + 1e-36L);
+                sg[l] += w * (1e-4L * fz_kl(lmax) * 2.0L * M_PI * s * (1.0L + s / c) / d + 1e-36L);
+            }
+        } else {
+            const fz_poly *P = &li->P;
+            fz_geom G;
+            if (!(P->structured && P->exact) || !fz_poly_geom(P, x, &G) || !(G.rmax > 0.0L)) return 0;
+            for (int l = 0; l <= lmax; ++l) sc[l] += w * 4.0L * epsf * fz_kl(l) * 4.0L * M_PI;
+            if (G.height == 0.0L) continue; /* in the plane: zeros in both (the same double test) */
+            long double ext = 0.0L, dmin = INFINITY;
+            for (int v = 0; v < P->n; ++v) {
+                long double dv2 = 0.0L;
+                for (int k = 0; k < 3; ++k) {
+                    ext = fmaxl(ext, fabsl((long double)P->v[3 * v + k] - P->v[k]));
+                    dv2 += ((long double)P->v[3 * v + k] - x[k]) * ((long double)P->v[3 * v + k] - x[k]);
+                }
+                dmin = fminl(dmin, sqrtl(dv2));
+            }
+            if (dmin > ldexpl(ext, 39)) return 0; /* documented: the batch may give zeros */
+            const long double condf = 8.0L * epsf * G.scale * G.gsum, gcondf = 8.0L * epsf * G.scale * G.g2sum;
+            const long double conddbl = 8.0L * (epsd * G.scale + 0x1p-1074L) * G.gsum;
+            for (int l = 0; l <= lmax; ++l) { /* fuzz_batch.c: sf + sd, gs */
+                const long double kl = fz_kl(l);
+                sc[l] += w * (kl * (1e-9L * G.omega + 300.0L * epsd * G.perim + conddbl) + 1e-300L +
+                              kl * (1e-4L * G.omega + 64.0L * (l + 1) * epsf * G.perim + condf + 1e-36L));
+                sg[l] += w * kl * (2e-4L * G.gsum + 64.0L * (l + 1) * epsf * G.gsum + 2.0L * gcondf + 1e-36L);
+            }
+        }
+    }
+    return 1;
+}
 
 /* Independent expectation for light i against the closed box [lo, hi]: 1 in, 0 out, -1 undecided. */
 static int expect_in_box(const glight *li, const double lo[3], const double hi[3])
@@ -200,6 +284,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     const int nn = node_count(res);
     double *node = malloc(sizeof(double) * (size_t)node_len * nn);
     double *direct = malloc(sizeof(double) * node_len);
+    float *fnode = malloc(sizeof(float) * node_len);
     /* a fresh grid is zero-filled */
     {
         const int idx[3] = {res[0] - 1, 0, res[2] / 2};
@@ -247,7 +332,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         shl__alloc_fail_after = 0;
         const int sf = shl_grid_fill(grid, set, nthreads);
         shl__alloc_fail_after = -1;
-        FUZZ_CHECK(sf == SHL_ENOMEM, "fill under ENOMEM: %d", sf);
+        /* an empty set on the float path allocates nothing (no box flags, no batch workspace) */
+        FUZZ_CHECK(sf == (ngl == 0 && storage == SHL_GRID_FLOAT && float_path(lo, hi, res) ? SHL_OK : SHL_ENOMEM),
+                   "fill under ENOMEM: %d", sf);
         const int idx[3] = {0, 0, 0};
         FUZZ_CHECK(shl_grid_get_node(grid, idx, direct, direct + nv) == SHL_OK && direct[0] == 0.0, "fill failed but wrote");
     }
@@ -263,6 +350,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* nodes: equal to the direct evaluation at their positions, rounded to the storage */
     int nodes_finite = 1;
     double vmax = 0.0, gmax = 0.0;
+    const int batch = storage == SHL_GRID_FLOAT && float_path(lo, hi, res);
+    long double sc[SHL_LMAX_MAX + 1], sg[SHL_LMAX_MAX + 1];
     for (int n = 0; n < nn; ++n) {
         const int idx[3] = {n % res[0], n / res[0] % res[1], n / res[0] / res[1]};
         double pos[3];
@@ -272,11 +361,31 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             else if (idx[a] == 0) FUZZ_CHECK(pos[a] == lo[a], "first node at %.17g, lo %.17g", pos[a], lo[a]);
         double *nd = node + (size_t)node_len * n;
         FUZZ_CHECK(shl_grid_get_node(grid, idx, nd, nd + nv) == SHL_OK, "get_node");
-        FUZZ_CHECK(shl_lights_eval(ctx, set, pos, direct, direct + nv) == SHL_OK, "lights_eval");
-        for (int k = 0; k < node_len; ++k) {
-            const double want_v = storage == SHL_GRID_FLOAT ? (double)(float)direct[k] : direct[k];
-            FUZZ_CHECK(memcmp(&nd[k], &want_v, sizeof(double)) == 0 || (isnan(nd[k]) && isnan(want_v)),
-                       "node %d value %d: %.17g, direct %.17g", n, k, nd[k], want_v);
+        if (batch) { /* the float batch at the rounded position, bit for bit; within its slack of the double path */
+            const float xf[3] = {(float)pos[0], (float)pos[1], (float)pos[2]};
+            const double xr[3] = {xf[0], xf[1], xf[2]};
+            for (int a = 0; a < 3; ++a)
+                FUZZ_CHECK(fabs(xr[a] - pos[a]) <= 0x1p-24 * fmax(fabs(lo[a]), fabs(hi[a])), "node %d axis %d rounds far", n, a);
+            FUZZ_CHECK(shl_lights_eval_batch_f(ctx, set, 1, xf, fnode, fnode + nv) == SHL_OK, "lights_eval_batch_f");
+            for (int k = 0; k < node_len; ++k)
+                FUZZ_CHECK(memcmp(&nd[k], &(double){fnode[k]}, sizeof(double)) == 0 || (isnan(nd[k]) && isnan(fnode[k])),
+                           "node %d value %d: %.9g, float batch %.9g", n, k, nd[k], fnode[k]);
+            FUZZ_CHECK(shl_lights_eval(ctx, set, xr, direct, direct + nv) == SHL_OK, "lights_eval");
+            if (magnitude < 1e30L && float_node_slack(lmax, xr, sc, sg))
+                for (int k = 0; k < node_len; ++k) {
+                    const int m = k % nc, l = (int)sqrt((double)m), isg = k >= nv;
+                    if (isg && !isfinite(nd[k])) continue; /* a gradient beyond float range (checked below) */
+                    FUZZ_CHECK(fabsl((long double)nd[k] - direct[k]) <= (isg ? sg[l] : sc[l]),
+                               "node %d %s %d (band %d): float %.9g, double %.17g, slack %.3Lg", n, isg ? "gradient" : "value", k,
+                               l, nd[k], direct[k], isg ? sg[l] : sc[l]);
+                }
+        } else {
+            FUZZ_CHECK(shl_lights_eval(ctx, set, pos, direct, direct + nv) == SHL_OK, "lights_eval");
+            for (int k = 0; k < node_len; ++k) {
+                const double want_v = storage == SHL_GRID_FLOAT ? (double)(float)direct[k] : direct[k];
+                FUZZ_CHECK(memcmp(&nd[k], &want_v, sizeof(double)) == 0 || (isnan(nd[k]) && isnan(want_v)),
+                           "node %d value %d: %.17g, direct %.17g", n, k, nd[k], want_v);
+            }
         }
         if (fz_is_verbose() && !all_finite_d(nd, node_len)) fz_dump_vec("non-finite node at", pos, 3);
         nodes_finite &= all_finite_d(nd, node_len);
@@ -416,6 +525,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 out:
     free(node);
     free(direct);
+    free(fnode);
     shl_lights_destroy(set);
     shl_grid_destroy(grid);
     return 0;
