@@ -28,10 +28,15 @@ struct shl_ctx {
 const shl__isa *shl__isa_select(void);
 
 /* Allocation hooks: every library allocation goes through these so that
- * tests can inject failures (tests/alloc_hook.c); not part of the public API. */
+ * tests can inject failures; not part of the public API. */
 void *shl__malloc(size_t size);
 void *shl__calloc(size_t count, size_t size);
 void shl__free(void *ptr);
+/* Failure injection, defined only in a library built with -DSHL_ALLOC_HOOKS (the
+ * test runner's and the fuzzers' copies): the N-th allocation (alloc.c) or thread
+ * creation (parallel.c) from now fails, N = the value; < 0: never. */
+extern long shl__alloc_fail_after;
+extern long shl__thread_fail_after;
 
 /* Y_lm at unit direction (x,y,z) for l <= lmax into y[(lmax+1)^2] (sh_basis.c). */
 void shl__sh_eval(int lmax, double x, double y, double z, double *out);

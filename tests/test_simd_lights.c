@@ -21,7 +21,7 @@
 #include <math.h>
 #include <string.h>
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 enum { MAXLIGHTS = 12, MAXPTS = 150, NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
 
