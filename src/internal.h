@@ -45,6 +45,45 @@ void shl__sh_eval(int lmax, double x, double y, double z, double *out);
 int shl__check_finite(const double *v, int count);
 int shl__check_finite_f(const float *v, int count);
 
+/* ---- small vector and polygon helpers (one copy for src/ and simd/) ---- */
+static inline double shl__dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void shl__cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* out = in / |in| for a finite, non-zero vector, scaled first so that the norm
+ * neither overflows nor underflows.  Returns SHL_ENONFINITE / SHL_EDOMAIN. */
+static inline int shl__unit(const double in[3], double out[3])
+{
+    if (shl__check_finite(in, 3)) return SHL_ENONFINITE;
+    const double big = fmax(fabs(in[0]), fmax(fabs(in[1]), fabs(in[2])));
+    if (!(big > 0.0)) return SHL_EDOMAIN;
+    const double v[3] = {in[0] / big, in[1] / big, in[2] / big};
+    const double len = sqrt(shl__dot3(v, v));
+    for (int k = 0; k < 3; ++k) out[k] = v[k] / len;
+    return SHL_OK;
+}
+
+/* The polygon verts[0..n) (xyz interleaved) into kept[] without the vertices that
+ * repeat their predecessor, the last one cyclically (zero-length edges); returns the
+ * number kept.  kept has room for n vertices. */
+static inline int shl__drop_repeated(const double *verts, int n, double *kept)
+{
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
+        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(double) * 3);
+    }
+    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    return m;
+}
+
 /* ilogb and ldexp without a libm call where the operands are normal doubles
  * (the scaled-geometry set-up below calls them per vertex and component);
  * results identical to libm's: 2^e is exact, and d 2^e is rounded once. */
@@ -89,6 +128,18 @@ static inline void shl__pow2_split(int e, double s[2])
 {
     s[0] = shl__ldexp(1.0, e / 2);
     s[1] = shl__ldexp(1.0, e - e / 2);
+}
+
+/* |v|, scaled by a power of two first where v . v could under- or overflow (v a
+ * cross product of short or long scaled edges); 0 for the zero vector. */
+static inline double shl__norm3(const double v[3])
+{
+    const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    if (!(m > 0.0)) return 0.0;
+    if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(shl__dot3(v, v));
+    const int e = shl__ilogb(m);
+    const double s[3] = {shl__ldexp(v[0], -e), shl__ldexp(v[1], -e), shl__ldexp(v[2], -e)};
+    return shl__ldexp(sqrt(shl__dot3(s, s)), e);
 }
 
 #endif

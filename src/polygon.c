@@ -119,14 +119,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
 {
     double kept[SHL_MAX_VERTS * 3];
-    int m = 0;
-    for (int i = 0; i < n; ++i) { /* drop vertices repeating their predecessor (zero-length edges) */
-        const double *v = verts + 3 * i;
-        if (m > 0 && memcmp(v, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
-        memcpy(kept + 3 * m, v, sizeof(double) * 3);
-        ++m;
-    }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    const int m = shl__drop_repeated(verts, n, kept); /* zero-length edges */
     g->n = 0;
     g->solid_angle = 0.0;
     g->grad_scale[0] = g->grad_scale[1] = 1.0;
