@@ -130,6 +130,32 @@ static inline void shl__pow2_split(int e, double s[2])
     s[1] = shl__ldexp(1.0, e - e / 2);
 }
 
+/* Newell normal sum_{i=1}^{n-2} (v_i - v_0) x (v_{i+1} - v_0) of the polygon
+ * verts[0..n) (xyz interleaved; counter-clockwise seen from its tip; exact for a
+ * triangle) in scaled units: the differences v_i - v_0 times the power of two
+ * 2^-E that brings the largest near 1, so that the cross products neither
+ * overflow nor underflow.  The zero vector when the vertices are equal up to the
+ * sign of zero. */
+static inline void shl__newell_scaled(const double *verts, int n, double nrm[3])
+{
+    int e = INT_MIN;
+    for (int i = 1; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const int ek = shl__ilogb_diff(verts[3 * i + k], verts[k]);
+            e = ek > e ? ek : e;
+        }
+    nrm[0] = nrm[1] = nrm[2] = 0.0;
+    for (int i = 1; i + 1 < n && e != INT_MIN; ++i) {
+        double e1[3], e2[3], c[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = shl__diff_scaled(verts[3 * i + k], verts[k], -e);
+            e2[k] = shl__diff_scaled(verts[3 * (i + 1) + k], verts[k], -e);
+        }
+        shl__cross3(e1, e2, c);
+        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
+    }
+}
+
 /* |v|, scaled by a power of two first where v . v could under- or overflow (v a
  * cross product of short or long scaled edges); 0 for the zero vector. */
 static inline double shl__norm3(const double v[3])

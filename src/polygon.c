@@ -40,24 +40,12 @@ static inline void scaled_sub3(const double a[3], const double b[3], int e, doub
     for (int k = 0; k < 3; ++k) out[k] = shl__diff_scaled(a[k], b[k], e);
 }
 
-/* Unit Newell normal of the polygon (counter-clockwise seen from its tip), from
- * the vertex differences v_i - v_0 scaled by a power of two that brings the
- * largest near 1 (the cross products neither overflow nor underflow); 0 for a
- * zero-area polygon (also vertices equal up to the sign of zero). */
+/* Unit Newell normal of the polygon (counter-clockwise seen from its tip,
+ * internal.h); 0 for a zero-area polygon (also vertices equal up to the sign of
+ * zero). */
 static int newell_normal(const double *verts, int n, double nrm[3])
 {
-    int e = INT_MIN;
-    for (int i = 1; i < n; ++i)
-        for (int k = 0; k < 3; ++k) e = imax(e, shl__ilogb_diff(verts[3 * i + k], verts[k]));
-    nrm[0] = nrm[1] = nrm[2] = 0.0;
-    if (e == INT_MIN) return 0;
-    for (int i = 1; i + 1 < n; ++i) {
-        double e1[3], e2[3], c[3];
-        scaled_sub3(verts + 3 * i, verts, -e, e1);
-        scaled_sub3(verts + 3 * (i + 1), verts, -e, e2);
-        cross3(e1, e2, c);
-        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
-    }
+    shl__newell_scaled(verts, n, nrm);
     const double len = norm3(nrm);
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) nrm[k] /= len;
