@@ -37,6 +37,17 @@ void shl__free(void *ptr);
  * creation (parallel.c) from now fails, N = the value; < 0: never. */
 extern long shl__alloc_fail_after;
 extern long shl__thread_fail_after;
+#ifdef SHL_ALLOC_HOOKS
+/* One step of such a counter: 1 when the failure is due (*left == 0), else
+ * counts *left down (< 0: never fails). */
+static inline int shl__hook_fails(long *left)
+{
+    if (*left < 0) return 0;
+    if (*left == 0) return 1;
+    --*left;
+    return 0;
+}
+#endif
 
 /* Y_lm at unit direction (x,y,z) for l <= lmax into y[(lmax+1)^2] (sh_basis.c). */
 void shl__sh_eval(int lmax, double x, double y, double z, double *out);
