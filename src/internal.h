@@ -168,7 +168,8 @@ static inline void shl__newell_scaled(const double *verts, int n, double nrm[3])
 }
 
 /* |v|, scaled by a power of two first where v . v could under- or overflow (v a
- * cross product of short or long scaled edges); 0 for the zero vector. */
+ * cross product of short or long scaled edges: in polygon.c its length feeds
+ * gamma and mu, Wang 2018 Eq. 19-20); 0 for the zero vector. */
 static inline double shl__norm3(const double v[3])
 {
     const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
