@@ -133,6 +133,23 @@ static inline double shl__diff_scaled(double a, double b, int e)
     const double d = a - b;
     return isinf(d) ? shl__ldexp(0.5 * a - 0.5 * b, e + 1) : shl__ldexp(d, e);
 }
+/* The exponent ex of the scaled units of the points v_i = pts[3i..3i+2], i < m,
+ * seen from x: the largest component of any v_i - x times 2^-ex lies in [1, 2).
+ * INT_MIN when x is one of the points (also up to the sign of zero). */
+static inline int shl__scale_exponent(const double x[3], const double *pts, int m)
+{
+    int ex = INT_MIN;
+    for (int i = 0; i < m; ++i) {
+        int ei = INT_MIN;
+        for (int k = 0; k < 3; ++k) {
+            const int d = shl__ilogb_diff(pts[3 * i + k], x[k]);
+            ei = d > ei ? d : ei;
+        }
+        if (ei == INT_MIN) return INT_MIN;
+        ex = ei > ex ? ei : ex;
+    }
+    return ex;
+}
 /* 2^e as a product s[0] s[1] of two doubles (|e| <= 2200): multiplying by both
  * in turn rounds only where the final result underflows or overflows. */
 static inline void shl__pow2_split(int e, double s[2])

@@ -103,16 +103,8 @@ static double polygon_irradiance(const double x[3], const double nrm[3], const d
     if (m < 3) return 0.0;
 
     /* scaled units: the largest component of v - x in [1, 2) */
-    int ex = INT_MIN;
-    for (int i = 0; i < m; ++i) {
-        int ei = INT_MIN;
-        for (int k = 0; k < 3; ++k) {
-            const int d = shl__ilogb_diff(kept[3 * i + k], x[k]);
-            ei = d > ei ? d : ei;
-        }
-        if (ei == INT_MIN) return 0.0; /* x on a vertex: in the plane */
-        ex = ei > ex ? ei : ex;
-    }
+    const int ex = shl__scale_exponent(x, kept, m);
+    if (ex == INT_MIN) return 0.0; /* x on a vertex: in the plane */
     clip_poly poly;
     poly.n = m;
     double rmax = 0.0;

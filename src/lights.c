@@ -19,11 +19,7 @@ size_t shl__lights_ws_size(int lmax) { return 4 * (size_t)SHL__ZH_BLOCK + 12 * a
 
 double shl__light_front_distance(const shl__light *li, const double *v0, const double x[3])
 {
-    int e = INT_MIN;
-    for (int k = 0; k < 3; ++k) {
-        const int ek = shl__ilogb_diff(x[k], v0[k]);
-        e = ek > e ? ek : e;
-    }
+    const int e = shl__scale_exponent(v0, x, 1);
     if (e == INT_MIN) return 0.0; /* x = v_0: in the plane */
     double d = 0.0;
     for (int k = 0; k < 3; ++k) d += li->normal[k] * shl__diff_scaled(x[k], v0[k], -e);

@@ -7,8 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-static inline int imax(int a, int b) { return a > b ? a : b; }
-
 /* (a - b) 2^e per component (internal.h) */
 static inline void scaled_sub3(const double a[3], const double b[3], int e, double out[3])
 {
@@ -89,13 +87,8 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     if (m < 3) return;
 
     /* scaled units: v - x times 2^-ex, largest component in [1, 2) (internal.h) */
-    int ex = INT_MIN;
-    for (int i = 0; i < m; ++i) {
-        int ei = INT_MIN;
-        for (int k = 0; k < 3; ++k) ei = imax(ei, shl__ilogb_diff(kept[3 * i + k], x[k]));
-        if (ei == INT_MIN) return; /* x on a vertex: in the plane */
-        ex = imax(ex, ei);
-    }
+    const int ex = shl__scale_exponent(x, kept, m);
+    if (ex == INT_MIN) return; /* x on a vertex: in the plane */
     for (int i = 0; i < m; ++i) {
         scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
         g->dist[i] = shl__norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
