@@ -48,8 +48,18 @@ BENCH_SRC := $(wildcard bench/bench_*.c) bench/demo.c
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 BENCH_COMMON := $(patsubst %.c,$(BUILD)/%.o,$(wildcard bench/common/*.c))
 
+# The version is written once, as SHL_VERSION_STRING in include/shlight.h.  The shared library is
+# libshlight.so.X.Y.Z with SONAME libshlight.so.X (X = major) and the symlinks libshlight.so.X and
+# libshlight.so (the link-time name), in $(BUILD) and on install.
+SHL_VERSION := $(shell sed -n 's/^\#define SHL_VERSION_STRING "\([0-9.]*\)"$$/\1/p' include/shlight.h)
+SHL_SOMAJOR := $(firstword $(subst ., ,$(SHL_VERSION)))
+SONAME      := libshlight.so.$(SHL_SOMAJOR)
+ifeq ($(SHL_SOMAJOR),)
+  $(error Makefile: no SHL_VERSION_STRING "X.Y.Z" found in include/shlight.h)
+endif
 STATIC   := $(BUILD)/libshlight.a
 SHARED   := $(BUILD)/libshlight.so
+SHARED_REAL := $(BUILD)/libshlight.so.$(SHL_VERSION)
 
 .PHONY: all test test-valgrind test-neon demo bench install lobes clean
 all: $(STATIC) $(SHARED)
@@ -73,8 +83,27 @@ $(STATIC): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(SHARED): $(LIB_OBJ)
-	$(CC) -shared $(LDFLAGS) -o $@ $^ $(LDLIBS)
+# Public symbols only: the library objects are compiled with -fvisibility=hidden and shlight.h
+# makes its own declarations default-visible, so the .so exports exactly the shl_[a-z]* API
+# (tools/check_symbols.sh).  Hidden symbols stay global in the objects: programs linked with
+# libshlight.a or the objects (tests, bench, tools) still resolve the internal shl__* ones.
+$(LIB_OBJ) $(TLIB_OBJ): CFLAGS_ALL += -fvisibility=hidden
+
+$(SHARED_REAL): $(LIB_OBJ)
+	$(CC) -shared -Wl,-soname,$(SONAME) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(BUILD)/$(SONAME): $(SHARED_REAL)
+	ln -sf $(notdir $<) $@
+
+$(SHARED): $(BUILD)/$(SONAME)
+	ln -sf $(SONAME) $@
+
+# The boundary: the .so exports only shlight.h's shl_[a-z]* functions and has its SONAME;
+# bench/ and tests/ reach shl__ internals only through the allowed internal headers
+# (tools/check_symbols.sh lists them) and never through the .so.
+.PHONY: check-symbols
+check-symbols: $(SHARED)
+	bash tools/check_symbols.sh $(BUILD)
 
 $(BUILD)/tests/run_tests: $(TEST_OBJ) $(TLIB_OBJ)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
@@ -164,14 +193,18 @@ install: all
 	install -d $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/lib/pkgconfig
 	install -m 644 include/shlight.h $(DESTDIR)$(PREFIX)/include/
 	install -m 644 $(STATIC) $(DESTDIR)$(PREFIX)/lib/
-	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/
-	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|0.1.0|g' tools/shlight.pc.in \
+	install -m 755 $(SHARED_REAL) $(DESTDIR)$(PREFIX)/lib/
+	ln -sf $(notdir $(SHARED_REAL)) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libshlight.so
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(SHL_VERSION)|g' tools/shlight.pc.in \
 	  > $(DESTDIR)$(PREFIX)/lib/pkgconfig/shlight.pc
 
-# Removes exactly the four files install wrote (same PREFIX and DESTDIR); directories stay.
+# Removes exactly the four files and two symlinks install wrote (same PREFIX and DESTDIR);
+# directories stay.
 .PHONY: uninstall
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/include/shlight.h $(DESTDIR)$(PREFIX)/lib/libshlight.a \
+	  $(DESTDIR)$(PREFIX)/lib/$(notdir $(SHARED_REAL)) $(DESTDIR)$(PREFIX)/lib/$(SONAME) \
 	  $(DESTDIR)$(PREFIX)/lib/libshlight.so $(DESTDIR)$(PREFIX)/lib/pkgconfig/shlight.pc
 
 clean:
@@ -303,8 +336,8 @@ help:
 	@printf '  %-19s %-64s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
 	@printf '  %-19s %-64s %s\n' bench-tables 'the papers'\'' tables into build/bench-tables/ (needs the meshes)' '~5 min'
 	@printf '  %-19s %-64s %s\n' bench-tables-accept 'copy a complete bench-tables run (+ plots) over bench/' '<1 s'
-	@printf '  %-19s %-64s %s\n' install 'all + header, both libraries, shlight.pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
-	@printf '  %-19s %-64s %s\n' uninstall 'remove exactly those four files (same PREFIX and DESTDIR)' '<1 s'
+	@printf '  %-19s %-64s %s\n' install 'all + header, .a, .so + 2 symlinks, .pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
+	@printf '  %-19s %-64s %s\n' uninstall 'remove exactly those 6 entries (same PREFIX and DESTDIR)' '<1 s'
 	@printf '  %-19s %-64s %s\n' lobes 'regenerate src/zh_tables.c with tools/gen_lobes' '1-2.5 min'
 	@printf '  %-19s %-64s %s\n' clean 'remove $$(BUILD)' '<1 s'
 	@printf '  %-19s %-64s %s\n' fuzz 'libFuzzer targets x FUZZ_SECONDS (60) each, ASan + UBSan' '~1 min build + 8 min'
@@ -318,6 +351,7 @@ help:
 	@printf '  %-19s %-64s %s\n' oracle-llvm 'find a libLLVM >= 17 for Dr.Jit, or say which package to install' '<1 s'
 	@printf '  %-19s %-64s %s\n' oracle 'full Mitsuba 3 / Dr.Jit comparison, writes bench/ORACLE.md' '39 min'
 	@printf '  %-19s %-64s %s\n' oracle-check 'the CI subset of the oracle (20 configurations, one image)' '4 min'
+	@printf '  %-19s %-64s %s\n' check-symbols 'the .so exports only shl_[a-z]*, has its SONAME; internal boundary' '<1 s + build'
 	@printf '  %-19s %-64s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
 	@printf '  %-19s %-64s %s\n' help 'this list' 'instant'
 	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, PREFIX (/usr/local), DESTDIR,'

@@ -24,6 +24,22 @@
 extern "C" {
 #endif
 
+/* Symbol visibility.  The library is built with -fvisibility=hidden, so only what
+ * this header declares is exported from libshlight.so: every declaration between
+ * this push and the pop at the end of the file is default-visible (gcc and clang;
+ * a definition inherits the visibility of its first declaration).  A pragma region
+ * has the effect of SLEEF's EXPORT macro on each declaration, without one on every
+ * line, so a new declaration placed anywhere in this header is exported.  Internal
+ * functions and tables (shl__*, declared in src/internal.h and the other headers of src/)
+ * stay hidden: programs reach them only by linking the static archive (README
+ * "Layout", internal boundary). */
+#if defined(__GNUC__)
+#pragma GCC visibility push(default)
+#endif
+
+/* The one place the version is written: the Makefile reads it for the shared
+ * library's file name (libshlight.so.MAJOR.MINOR.PATCH, SONAME libshlight.so.MAJOR)
+ * and for shlight.pc. */
 #define SHL_VERSION_STRING "0.1.0"
 
 /** Highest band supported by every entry point. */
@@ -660,6 +676,10 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
 const char *shl_ctx_isa(const shl_ctx *ctx);
 /** Build description: version, compiler, flags, batch ISAs compiled in (never NULL). */
 const char *shl_build_info(void);
+
+#if defined(__GNUC__)
+#pragma GCC visibility pop
+#endif
 
 #ifdef __cplusplus
 }

@@ -6,13 +6,7 @@
 
 #ifdef SHL_ALLOC_HOOKS
 long shl__alloc_fail_after = -1; /* < 0: never fail */
-static int alloc_should_fail(void)
-{
-    if (shl__alloc_fail_after < 0) return 0;
-    if (shl__alloc_fail_after == 0) return 1;
-    --shl__alloc_fail_after;
-    return 0;
-}
+static int alloc_should_fail(void) { return shl__hook_fails(&shl__alloc_fail_after); }
 #else
 static int alloc_should_fail(void) { return 0; }
 #endif

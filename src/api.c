@@ -51,25 +51,12 @@ void shl_ctx_destroy(shl_ctx *ctx) { shl__free(ctx); }
 
 int shl_ctx_lmax(const shl_ctx *ctx) { return ctx ? ctx->lmax : SHL_ENULL; }
 
-/* Unit direction from a finite, non-zero vector; scaled first so that huge or
- * tiny components neither overflow nor underflow in the norm. */
-static int unit_direction(const double in[3], double out[3])
-{
-    if (shl__check_finite(in, 3)) return SHL_ENONFINITE;
-    const double big = fmax(fabs(in[0]), fmax(fabs(in[1]), fabs(in[2])));
-    if (!(big > 0.0)) return SHL_EDOMAIN;
-    const double v[3] = {in[0] / big, in[1] / big, in[2] / big};
-    const double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    for (int k = 0; k < 3; ++k) out[k] = v[k] / len;
-    return SHL_OK;
-}
-
 int shl_eval_basis(int lmax, const double dir[3], double *y)
 {
     if (!dir || !y) return SHL_ENULL;
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
     double u[3];
-    const int st = unit_direction(dir, u);
+    const int st = shl__unit(dir, u);
     if (st) return st;
     shl__sh_eval(lmax, u[0], u[1], u[2], y);
     return SHL_OK;
@@ -81,7 +68,7 @@ int shl_eval_basis_f(int lmax, const float dir[3], float *y)
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
     const double d[3] = {dir[0], dir[1], dir[2]};
     double u[3], yd[SHL_NCOEFFS(SHL_LMAX_MAX)];
-    const int st = unit_direction(d, u);
+    const int st = shl__unit(d, u);
     if (st) return st;
     shl__sh_eval(lmax, u[0], u[1], u[2], yd);
     for (int k = 0; k < SHL_NCOEFFS(lmax); ++k) y[k] = (float)yd[k];

@@ -10,24 +10,12 @@
 #include <math.h>
 #include <string.h>
 
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* Repeated vertices dropped as in shl__poly_geom_init (polygon.c); P->n = 0
  * when fewer than 3 remain or the polygon has zero area. */
 void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
 {
     double kept[3 * SHL_MAX_VERTS];
-    int m = 0;
-    for (int i = 0; i < n; ++i) {
-        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
-        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(double) * 3);
-    }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    const int m = shl__drop_repeated(verts, n, kept);
     P->n = 0;
     if (m < 3) return;
     double ext = 0.0; /* extent about v_0 */
@@ -44,10 +32,10 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
             e1[k] = P->vd[i][k] - P->vd[0][k];
             e2[k] = P->vd[i + 1][k] - P->vd[0][k];
         }
-        cross3(e1, e2, c[i]);
+        shl__cross3(e1, e2, c[i]);
         for (int k = 0; k < 3; ++k) normal[k] += c[i][k];
     }
-    const double len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
+    const double len2 = shl__dot3(normal, normal);
     if (!(len2 > 0.0)) return; /* zero area: sees nothing */
     memcpy(P->normal, normal, sizeof normal);
     P->len2 = len2;
@@ -62,7 +50,7 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
         P->fan[i] = 0.0f;
     }
     for (int i = 1; i + 1 < m; ++i)
-        P->fan[i] = (float)((normal[0] * c[i][0] + normal[1] * c[i][1] + normal[2] * c[i][2]) / len2);
+        P->fan[i] = (float)(shl__dot3(normal, c[i]) / len2);
     const double inv_len = 1.0 / sqrt(len2);
     for (int k = 0; k < 3; ++k) {
         P->unit_normal[k] = (float)(normal[k] * inv_len);

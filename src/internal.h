@@ -28,10 +28,26 @@ struct shl_ctx {
 const shl__isa *shl__isa_select(void);
 
 /* Allocation hooks: every library allocation goes through these so that
- * tests can inject failures (tests/alloc_hook.c); not part of the public API. */
+ * tests can inject failures; not part of the public API. */
 void *shl__malloc(size_t size);
 void *shl__calloc(size_t count, size_t size);
 void shl__free(void *ptr);
+/* Failure injection, defined only in a library built with -DSHL_ALLOC_HOOKS (the
+ * test runner's and the fuzzers' copies): the N-th allocation (alloc.c) or thread
+ * creation (parallel.c) from now fails, N = the value; < 0: never. */
+extern long shl__alloc_fail_after;
+extern long shl__thread_fail_after;
+#ifdef SHL_ALLOC_HOOKS
+/* One step of such a counter: 1 when the failure is due (*left == 0), else
+ * counts *left down (< 0: never fails). */
+static inline int shl__hook_fails(long *left)
+{
+    if (*left < 0) return 0;
+    if (*left == 0) return 1;
+    --*left;
+    return 0;
+}
+#endif
 
 /* Y_lm at unit direction (x,y,z) for l <= lmax into y[(lmax+1)^2] (sh_basis.c). */
 void shl__sh_eval(int lmax, double x, double y, double z, double *out);
@@ -39,6 +55,45 @@ void shl__sh_eval(int lmax, double x, double y, double z, double *out);
 /* Argument checks shared by the API entry points (api.c). */
 int shl__check_finite(const double *v, int count);
 int shl__check_finite_f(const float *v, int count);
+
+/* ---- small vector and polygon helpers (one copy for src/ and simd/) ---- */
+static inline double shl__dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void shl__cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* out = in / |in| for a finite, non-zero vector, scaled first so that the norm
+ * neither overflows nor underflows.  Returns SHL_ENONFINITE / SHL_EDOMAIN. */
+static inline int shl__unit(const double in[3], double out[3])
+{
+    if (shl__check_finite(in, 3)) return SHL_ENONFINITE;
+    const double big = fmax(fabs(in[0]), fmax(fabs(in[1]), fabs(in[2])));
+    if (!(big > 0.0)) return SHL_EDOMAIN;
+    const double v[3] = {in[0] / big, in[1] / big, in[2] / big};
+    const double len = sqrt(shl__dot3(v, v));
+    for (int k = 0; k < 3; ++k) out[k] = v[k] / len;
+    return SHL_OK;
+}
+
+/* The polygon verts[0..n) (xyz interleaved) into kept[] without the vertices that
+ * repeat their predecessor, the last one cyclically (zero-length edges); returns the
+ * number kept.  kept has room for n vertices. */
+static inline int shl__drop_repeated(const double *verts, int n, double *kept)
+{
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        if (m > 0 && memcmp(verts + 3 * i, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
+        memcpy(kept + 3 * m++, verts + 3 * i, sizeof(double) * 3);
+    }
+    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    return m;
+}
 
 /* ilogb and ldexp without a libm call where the operands are normal doubles
  * (the scaled-geometry set-up below calls them per vertex and component);
@@ -78,12 +133,68 @@ static inline double shl__diff_scaled(double a, double b, int e)
     const double d = a - b;
     return isinf(d) ? shl__ldexp(0.5 * a - 0.5 * b, e + 1) : shl__ldexp(d, e);
 }
+/* The exponent ex of the scaled units of the points v_i = pts[3i..3i+2], i < m,
+ * seen from x: the largest component of any v_i - x times 2^-ex lies in [1, 2).
+ * INT_MIN when x is one of the points (also up to the sign of zero). */
+static inline int shl__scale_exponent(const double x[3], const double *pts, int m)
+{
+    int ex = INT_MIN;
+    for (int i = 0; i < m; ++i) {
+        int ei = INT_MIN;
+        for (int k = 0; k < 3; ++k) {
+            const int d = shl__ilogb_diff(pts[3 * i + k], x[k]);
+            ei = d > ei ? d : ei;
+        }
+        if (ei == INT_MIN) return INT_MIN;
+        ex = ei > ex ? ei : ex;
+    }
+    return ex;
+}
 /* 2^e as a product s[0] s[1] of two doubles (|e| <= 2200): multiplying by both
  * in turn rounds only where the final result underflows or overflows. */
 static inline void shl__pow2_split(int e, double s[2])
 {
     s[0] = shl__ldexp(1.0, e / 2);
     s[1] = shl__ldexp(1.0, e - e / 2);
+}
+
+/* Newell normal sum_{i=1}^{n-2} (v_i - v_0) x (v_{i+1} - v_0) of the polygon
+ * verts[0..n) (xyz interleaved; counter-clockwise seen from its tip; exact for a
+ * triangle) in scaled units: the differences v_i - v_0 times the power of two
+ * 2^-E that brings the largest near 1, so that the cross products neither
+ * overflow nor underflow.  The zero vector when the vertices are equal up to the
+ * sign of zero. */
+static inline void shl__newell_scaled(const double *verts, int n, double nrm[3])
+{
+    int e = INT_MIN;
+    for (int i = 1; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const int ek = shl__ilogb_diff(verts[3 * i + k], verts[k]);
+            e = ek > e ? ek : e;
+        }
+    nrm[0] = nrm[1] = nrm[2] = 0.0;
+    for (int i = 1; i + 1 < n && e != INT_MIN; ++i) {
+        double e1[3], e2[3], c[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = shl__diff_scaled(verts[3 * i + k], verts[k], -e);
+            e2[k] = shl__diff_scaled(verts[3 * (i + 1) + k], verts[k], -e);
+        }
+        shl__cross3(e1, e2, c);
+        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
+    }
+}
+
+/* |v|, scaled by a power of two first where v . v could under- or overflow (v a
+ * cross product of short or long scaled edges: in polygon.c its length feeds
+ * gamma and mu, Wang 2018 Eq. 19-20); 0 for the zero vector. */
+static inline double shl__norm3(const double v[3])
+{
+    const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    if (!(m > 0.0)) return 0.0;
+    if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(shl__dot3(v, v));
+    const int e = shl__ilogb(m);
+    const double s[3] = {shl__ldexp(v[0], -e), shl__ldexp(v[1], -e), shl__ldexp(v[2], -e)};
+    return shl__ldexp(sqrt(shl__dot3(s, s)), e);
 }
 
 #endif

@@ -9,24 +9,6 @@
 #include "sh_ops.h"
 #include <float.h>
 
-static inline void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* |v| without under/overflow of v . v (v is a cross product of scaled lengths). */
-static double norm3(const double v[3])
-{
-    const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
-    if (!(m > 0.0)) return 0.0;
-    if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(shl__dot3(v, v));
-    const int e = shl__ilogb(m);
-    const double s[3] = {shl__ldexp(v[0], -e), shl__ldexp(v[1], -e), shl__ldexp(v[2], -e)};
-    return shl__ldexp(sqrt(shl__dot3(s, s)), e);
-}
-
 enum { MAXV = 2 * SHL_MAX_VERTS, /* clipping adds at most one vertex per edge */
        NGAUSS = 5 };
 
@@ -50,8 +32,8 @@ static double lambert(const clip_poly *p, const double nrm[3])
         const int f = e + 1 == p->n ? 0 : e + 1;
         double edge[3], c[3];
         for (int k = 0; k < 3; ++k) edge[k] = p->off[f][k] - p->off[e][k];
-        cross3(p->pos[e], edge, c);
-        const double clen = norm3(c);
+        shl__cross3(p->pos[e], edge, c);
+        const double clen = shl__norm3(c);
         if (!(clen > 0.0)) continue; /* zero arc: no contribution */
         const double gamma = atan2(clen, shl__dot3(p->pos[e], p->pos[f]));
         sum += gamma * (shl__dot3(nrm, c) / clen);
@@ -77,7 +59,7 @@ static double area_rule(const clip_poly *p, const double nrm[3], const double pn
             ab[k] = p->off[t][k] - p->off[0][k];
             bc[k] = p->off[t + 1][k] - p->off[t][k];
         }
-        cross3(ab, bc, c);
+        shl__cross3(ab, bc, c);
         const double area2 = shl__dot3(pnrm, c); /* twice the signed area */
         double tri = 0.0;
         for (int i = 0; i < NGAUSS; ++i) {
@@ -104,10 +86,10 @@ static int newell(const clip_poly *p, double out[3])
     out[0] = out[1] = out[2] = 0.0;
     for (int i = 1; i + 1 < p->n; ++i) {
         double c[3];
-        cross3(p->off[i], p->off[i + 1], c);
+        shl__cross3(p->off[i], p->off[i + 1], c);
         for (int k = 0; k < 3; ++k) out[k] += c[k];
     }
-    const double len = norm3(out);
+    const double len = shl__norm3(out);
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) out[k] /= len;
     return 1;
@@ -117,27 +99,12 @@ static int newell(const clip_poly *p, double out[3])
 static double polygon_irradiance(const double x[3], const double nrm[3], const double *verts, int n)
 {
     double kept[SHL_MAX_VERTS * 3];
-    int m = 0;
-    for (int i = 0; i < n; ++i) { /* drop vertices repeating their predecessor, as polygon.c */
-        const double *v = verts + 3 * i;
-        if (m > 0 && memcmp(v, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
-        memcpy(kept + 3 * m, v, sizeof(double) * 3);
-        ++m;
-    }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    const int m = shl__drop_repeated(verts, n, kept); /* as polygon.c */
     if (m < 3) return 0.0;
 
     /* scaled units: the largest component of v - x in [1, 2) */
-    int ex = INT_MIN;
-    for (int i = 0; i < m; ++i) {
-        int ei = INT_MIN;
-        for (int k = 0; k < 3; ++k) {
-            const int d = shl__ilogb_diff(kept[3 * i + k], x[k]);
-            ei = d > ei ? d : ei;
-        }
-        if (ei == INT_MIN) return 0.0; /* x on a vertex: in the plane */
-        ex = ei > ex ? ei : ex;
-    }
+    const int ex = shl__scale_exponent(x, kept, m);
+    if (ex == INT_MIN) return 0.0; /* x on a vertex: in the plane */
     clip_poly poly;
     poly.n = m;
     double rmax = 0.0;
@@ -146,7 +113,7 @@ static double polygon_irradiance(const double x[3], const double nrm[3], const d
             poly.pos[i][k] = shl__diff_scaled(kept[3 * i + k], x[k], -ex);
             poly.off[i][k] = shl__diff_scaled(kept[3 * i + k], kept[k], -ex);
         }
-    for (int i = 0; i < m; ++i) rmax = fmax(rmax, norm3(poly.pos[i]));
+    for (int i = 0; i < m; ++i) rmax = fmax(rmax, shl__norm3(poly.pos[i]));
     double pnrm[3];
     if (!newell(&poly, pnrm)) return 0.0; /* zero area */
     double height = shl__dot3(pnrm, poly.pos[0]);
@@ -206,8 +173,8 @@ static double polygon_irradiance(const double x[3], const double nrm[3], const d
     for (int i = 0; i < use->n; ++i) {
         double d[3];
         for (int k = 0; k < 3; ++k) d[k] = use->off[i][k] - use->off[0][k];
-        size = fmax(size, norm3(d));
-        dmin = fmin(dmin, norm3(use->pos[i]));
+        size = fmax(size, shl__norm3(d));
+        dmin = fmin(dmin, shl__norm3(use->pos[i]));
     }
     return 16.0 * size <= dmin ? area_rule(use, nrm, pnrm, height) : lambert(use, nrm);
 }

@@ -19,11 +19,7 @@ size_t shl__lights_ws_size(int lmax) { return 4 * (size_t)SHL__ZH_BLOCK + 12 * a
 
 double shl__light_front_distance(const shl__light *li, const double *v0, const double x[3])
 {
-    int e = INT_MIN;
-    for (int k = 0; k < 3; ++k) {
-        const int ek = shl__ilogb_diff(x[k], v0[k]);
-        e = ek > e ? ek : e;
-    }
+    const int e = shl__scale_exponent(v0, x, 1);
     if (e == INT_MIN) return 0.0; /* x = v_0: in the plane */
     double d = 0.0;
     for (int k = 0; k < 3; ++k) d += li->normal[k] * shl__diff_scaled(x[k], v0[k], -e);
@@ -208,24 +204,7 @@ int shl_lights_add_polygon(shl_lights *lights, const double *verts, int n, const
     memcpy(li->rgb, rgb, sizeof li->rgb);
     li->n = n;
     li->vofs = lights->nverts;
-    li->normal[0] = li->normal[1] = li->normal[2] = 0.0;
-    int ex = INT_MIN; /* the differences v_i - v_0 in scaled units (internal.h) */
-    for (int i = 1; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-            const int ek = shl__ilogb_diff(verts[3 * i + k], verts[k]);
-            ex = ek > ex ? ek : ex;
-        }
-    for (int i = 1; i + 1 < n && ex != INT_MIN; ++i) { /* Newell normal as a fan from v_0: exact for a triangle */
-        const double *p = verts + 3 * i, *q = verts + 3 * (i + 1);
-        double e[3], f[3];
-        for (int k = 0; k < 3; ++k) {
-            e[k] = shl__diff_scaled(p[k], verts[k], -ex);
-            f[k] = shl__diff_scaled(q[k], verts[k], -ex);
-        }
-        li->normal[0] += e[1] * f[2] - e[2] * f[1];
-        li->normal[1] += e[2] * f[0] - e[0] * f[2];
-        li->normal[2] += e[0] * f[1] - e[1] * f[0];
-    }
+    shl__newell_scaled(verts, n, li->normal); /* a fan from v_0: exact for a triangle */
     memcpy(lights->verts + lights->nverts, verts, sizeof(double) * 3 * (size_t)n);
     lights->nverts += 3 * (size_t)n;
     ++lights->count;

@@ -6,13 +6,7 @@
 
 #ifdef SHL_ALLOC_HOOKS
 long shl__thread_fail_after = -1; /* tests: the N-th thread creation fails (< 0: never) */
-static int create_should_fail(void)
-{
-    if (shl__thread_fail_after < 0) return 0;
-    if (shl__thread_fail_after == 0) return 1;
-    --shl__thread_fail_after;
-    return 0;
-}
+static int create_should_fail(void) { return shl__hook_fails(&shl__thread_fail_after); }
 #else
 static int create_should_fail(void) { return 0; }
 #endif

@@ -7,58 +7,19 @@
 #include <math.h>
 #include <string.h>
 
-static inline double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static inline int imax(int a, int b) { return a > b ? a : b; }
-
-/* |v|, scaled by a power of two first: v . v may underflow when v is tiny (a cross
- * product of a short edge: its length feeds gamma and mu, Wang 2018 Eq. 19-20) */
-static inline double norm3(const double v[3])
-{
-    const double a0 = fabs(v[0]), a1 = fabs(v[1]), a2 = fabs(v[2]);
-    const double m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
-    if (!(m > 0.0)) return 0.0;
-    if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(dot3(v, v)); /* v . v in range: no scaling needed */
-    const int e = shl__ilogb(m);
-    const double s[3] = {shl__ldexp(v[0], -e), shl__ldexp(v[1], -e), shl__ldexp(v[2], -e)};
-    return shl__ldexp(sqrt(dot3(s, s)), e);
-}
-
 /* (a - b) 2^e per component (internal.h) */
 static inline void scaled_sub3(const double a[3], const double b[3], int e, double out[3])
 {
     for (int k = 0; k < 3; ++k) out[k] = shl__diff_scaled(a[k], b[k], e);
 }
 
-/* Unit Newell normal of the polygon (counter-clockwise seen from its tip), from
- * the vertex differences v_i - v_0 scaled by a power of two that brings the
- * largest near 1 (the cross products neither overflow nor underflow); 0 for a
- * zero-area polygon (also vertices equal up to the sign of zero). */
+/* Unit Newell normal of the polygon (counter-clockwise seen from its tip,
+ * internal.h); 0 for a zero-area polygon (also vertices equal up to the sign of
+ * zero). */
 static int newell_normal(const double *verts, int n, double nrm[3])
 {
-    int e = INT_MIN;
-    for (int i = 1; i < n; ++i)
-        for (int k = 0; k < 3; ++k) e = imax(e, shl__ilogb_diff(verts[3 * i + k], verts[k]));
-    nrm[0] = nrm[1] = nrm[2] = 0.0;
-    if (e == INT_MIN) return 0;
-    for (int i = 1; i + 1 < n; ++i) {
-        double e1[3], e2[3], c[3];
-        scaled_sub3(verts + 3 * i, verts, -e, e1);
-        scaled_sub3(verts + 3 * (i + 1), verts, -e, e2);
-        cross3(e1, e2, c);
-        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
-    }
-    const double len = norm3(nrm);
+    shl__newell_scaled(verts, n, nrm);
+    const double len = shl__norm3(nrm);
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) nrm[k] /= len;
     return 1;
@@ -82,17 +43,17 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     for (int i = 1; i < n; ++i) {
         double d[3];
         scaled_sub3(verts + 3 * i, verts, e, d);
-        extent = fmax(extent, sqrt(dot3(d, d)));
+        extent = fmax(extent, sqrt(shl__dot3(d, d)));
     }
     if (fabs(height) >= 2.0 * extent) {
         for (int i = 1; i + 1 < n; ++i) {
             double e1[3], e2[3], c[3];
             scaled_sub3(verts + 3 * i, verts, e, e1);
             scaled_sub3(verts + 3 * (i + 1), verts, e, e2);
-            cross3(e1, e2, c);
-            const double num = dot3(rel[0], c);
-            const double den = dist[0] * dist[i] * dist[i + 1] + dot3(rel[0], rel[i]) * dist[i + 1] +
-                               dot3(rel[0], rel[i + 1]) * dist[i] + dot3(rel[i], rel[i + 1]) * dist[0];
+            shl__cross3(e1, e2, c);
+            const double num = shl__dot3(rel[0], c);
+            const double den = dist[0] * dist[i] * dist[i + 1] + shl__dot3(rel[0], rel[i]) * dist[i + 1] +
+                               shl__dot3(rel[0], rel[i + 1]) * dist[i] + shl__dot3(rel[i], rel[i + 1]) * dist[0];
             total += 2.0 * atan2(num, den);
         }
         return fabs(total);
@@ -101,16 +62,16 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         double ei[3], ej[3], edge[3], c[3];
-        const double hi = dot3(nrm, rel[i]), hj = dot3(nrm, rel[j]);
+        const double hi = shl__dot3(nrm, rel[i]), hj = shl__dot3(nrm, rel[j]);
         for (int k = 0; k < 3; ++k) {
             ei[k] = rel[i][k] - hi * nrm[k];
             ej[k] = rel[j][k] - hj * nrm[k];
         }
         scaled_sub3(verts + 3 * j, verts + 3 * i, e, edge); /* e_i x e_j = e_i x (v_j - v_i) */
-        cross3(ei, edge, c);
-        const double num = dot3(nrm, c), dot = dot3(ei, ej), ri = dist[i], rj = dist[j];
+        shl__cross3(ei, edge, c);
+        const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double pair = dot >= 0.0 ? ri * rj + dot
-                                       : (a * a * (a * a + dot3(ei, ei) + dot3(ej, ej)) + num * num) / (ri * rj - dot);
+                                       : (a * a * (a * a + shl__dot3(ei, ei) + shl__dot3(ej, ej)) + num * num) / (ri * rj - dot);
         total += 2.0 * atan2(num, pair + a * (ri + rj) + a * a);
     }
     return fabs(total);
@@ -119,36 +80,24 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
 {
     double kept[SHL_MAX_VERTS * 3];
-    int m = 0;
-    for (int i = 0; i < n; ++i) { /* drop vertices repeating their predecessor (zero-length edges) */
-        const double *v = verts + 3 * i;
-        if (m > 0 && memcmp(v, kept + 3 * (m - 1), sizeof(double) * 3) == 0) continue;
-        memcpy(kept + 3 * m, v, sizeof(double) * 3);
-        ++m;
-    }
-    while (m > 1 && memcmp(kept, kept + 3 * (m - 1), sizeof(double) * 3) == 0) --m;
+    const int m = shl__drop_repeated(verts, n, kept); /* zero-length edges */
     g->n = 0;
     g->solid_angle = 0.0;
     g->grad_scale[0] = g->grad_scale[1] = 1.0;
     if (m < 3) return;
 
     /* scaled units: v - x times 2^-ex, largest component in [1, 2) (internal.h) */
-    int ex = INT_MIN;
-    for (int i = 0; i < m; ++i) {
-        int ei = INT_MIN;
-        for (int k = 0; k < 3; ++k) ei = imax(ei, shl__ilogb_diff(kept[3 * i + k], x[k]));
-        if (ei == INT_MIN) return; /* x on a vertex: in the plane */
-        ex = imax(ex, ei);
-    }
+    const int ex = shl__scale_exponent(x, kept, m);
+    if (ex == INT_MIN) return; /* x on a vertex: in the plane */
     for (int i = 0; i < m; ++i) {
         scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
-        g->dist[i] = norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
+        g->dist[i] = shl__norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
         if (!(g->dist[i] > 0.0)) return; /* within 2^-1074 of the farthest vertex: on it, in the plane */
     }
     double nrm[3], rmax = 0.0;
     if (!newell_normal(kept, m, nrm)) return; /* zero-area polygon: sees nothing */
     for (int i = 0; i < m; ++i) rmax = fmax(rmax, g->dist[i]);
-    const double height = dot3(nrm, g->rel[0]); /* signed: > 0 when the polygon lies along +nrm */
+    const double height = shl__dot3(nrm, g->rel[0]); /* signed: > 0 when the polygon lies along +nrm */
     /* Below a few ulps of the distances the side of the plane is decided by rounding. */
     if (fabs(height) <= 8.0 * DBL_EPSILON * rmax) return;
     /* Seen from x, the polygon is counter-clockwise from outside the unit sphere
@@ -162,7 +111,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             }
         for (int i = 0; i < m; ++i) {
             scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
-            g->dist[i] = norm3(g->rel[i]);
+            g->dist[i] = shl__norm3(g->rel[i]);
         }
     }
     const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, -ex, nrm, height);
@@ -176,10 +125,10 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         const int f = (e + 1) % m;
         double edge[3], c[3];
         scaled_sub3(kept + 3 * f, kept + 3 * e, -ex, edge); /* from the input vertices: exact for nearby ones */
-        cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
-        const double clen = norm3(c);
+        shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
+        const double clen = shl__norm3(c);
         /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
-        g->gamma[e] = atan2(clen, dot3(g->rel[e], g->rel[f]));
+        g->gamma[e] = atan2(clen, shl__dot3(g->rel[e], g->rel[f]));
         g->sin_gamma[e] = sin(g->gamma[e]);
         g->cos_gamma[e] = cos(g->gamma[e]);
         const double half = sin(0.5 * g->gamma[e]);
@@ -187,27 +136,27 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         /* w_f - w_e = edge/r_f + w_e (r_e - r_f)/r_f, r_e - r_f = -edge.(rel_e + rel_f)/(r_e + r_f):
          * no cancellation for an edge short against the distances; for a longer one its terms
          * can reach |edge| / min(r) (and overflow), while w_f - w_e itself is then accurate */
-        if (norm3(edge) <= fmin(g->dist[e], g->dist[f])) {
+        if (shl__norm3(edge) <= fmin(g->dist[e], g->dist[f])) {
             double sum[3];
             for (int k = 0; k < 3; ++k) sum[k] = g->rel[e][k] + g->rel[f][k];
-            const double dr = -dot3(edge, sum) / (g->dist[e] + g->dist[f]);
+            const double dr = -shl__dot3(edge, sum) / (g->dist[e] + g->dist[f]);
             for (int k = 0; k < 3; ++k) g->dw[e][k] = edge[k] / g->dist[f] + g->w[e][k] * (dr / g->dist[f]);
         } else {
             for (int k = 0; k < 3; ++k) g->dw[e][k] = g->w[f][k] - g->w[e][k];
         }
         if (clen > 0.0) {
             for (int k = 0; k < 3; ++k) g->mu[e][k] = c[k] / clen;
-            cross3(g->mu[e], g->w[e], g->lam[e]);
+            shl__cross3(g->mu[e], g->w[e], g->lam[e]);
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
              * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
             double q[3], gxmu[3];
-            cross3(edge, g->mu[e], q);
+            shl__cross3(edge, g->mu[e], q);
             for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen;
-            cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
-            g->fprime1[e] = dot3(g->w[f], gxmu);
+            shl__cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
+            g->fprime1[e] = shl__dot3(g->w[f], gxmu);
             /* I_0 = g . int_0^gamma w(t) dt = g . (w_e sin(gamma) + lambda_e (1 - cos(gamma))) */
-            g->f_integral[e] = dot3(g->gvec[e], g->w[e]) * g->sin_gamma[e] +
-                               dot3(g->gvec[e], g->lam[e]) * g->omc_gamma[e];
+            g->f_integral[e] = shl__dot3(g->gvec[e], g->w[e]) * g->sin_gamma[e] +
+                               shl__dot3(g->gvec[e], g->lam[e]) * g->omc_gamma[e];
         } else { /* underflowed arc: contributes nothing (gamma = 0, c_e = 0) */
             for (int k = 0; k < 3; ++k) g->mu[e][k] = g->lam[e][k] = g->gvec[e][k] = 0.0;
             g->fprime1[e] = g->f_integral[e] = 0.0;

@@ -6,25 +6,6 @@
 #include "internal.h"
 #include <math.h>
 
-/* ---- small vector helpers --------------------------------------------- */
-static inline double shl__dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/* out = in / |in| for a finite, non-zero vector, scaled first so that the norm
- * neither overflows nor underflows.  Returns SHL_ENONFINITE / SHL_EDOMAIN. */
-static inline int shl__unit(const double in[3], double out[3])
-{
-    if (shl__check_finite(in, 3)) return SHL_ENONFINITE;
-    const double big = fmax(fabs(in[0]), fmax(fabs(in[1]), fabs(in[2])));
-    if (!(big > 0.0)) return SHL_EDOMAIN;
-    const double v[3] = {in[0] / big, in[1] / big, in[2] / big};
-    const double len = sqrt(shl__dot3(v, v));
-    for (int k = 0; k < 3; ++k) out[k] = v[k] / len;
-    return SHL_OK;
-}
-
 /* ---- spherical caps and lights (sphere.c) ------------------------------ */
 /* Y_lm(u) for a unit vector u into y[(lmax+1)^2] and, when grad != NULL, the
  * surface gradient grad[a*stride + k] = d/du_a of Y_k(u/|u|) at |u| = 1. */

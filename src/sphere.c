@@ -18,11 +18,7 @@
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius)
 {
-    int e = INT_MIN;
-    for (int k = 0; k < 3; ++k) {
-        const int ek = shl__ilogb_diff(center[k], x[k]);
-        e = ek > e ? ek : e;
-    }
+    const int e = shl__scale_exponent(x, center, 1);
     g->inside = 1;
     if (e == INT_MIN) return; /* centre at x */
     /* scaled units (internal.h): center - x times 2^-e, largest component in [1, 2);

@@ -135,8 +135,6 @@ SHL_TEST(basis_bad_input)
     CHECK(strcmp(shl_strerror(SHL_ENULL), shl_strerror(12345)) != 0);
 }
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
-
 SHL_TEST(basis_ctx_create_bad_input_and_alloc_failure)
 {
     shl_ctx *sentinel = (shl_ctx *)&sentinel, *ctx = sentinel;

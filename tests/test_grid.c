@@ -11,9 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-extern long shl__alloc_fail_after;
-extern long shl__thread_fail_after;
-
 enum { LMAX = 4, NC = SHL_NCOEFFS(LMAX), NV = 3 * NC, NG = 9 * NC };
 
 static const double quad_light[12] = {-1.0, -0.5, 1.5, 1.0, -0.5, 1.5, 1.0, 0.5, 1.5, -1.0, 0.5, 1.5};

@@ -7,7 +7,7 @@
 #include <math.h>
 #include <stddef.h>
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 static char garbage_obj; /* its address is the garbage value: non-NULL, never a real handle */
 #define GARBAGE(type) ((type *)(void *)&garbage_obj)

@@ -8,10 +8,9 @@
 #include "shlight.h"
 #include <float.h>
 #include <math.h>
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 enum { L = SHL_LMAX_MAX, NC = SHL_NCOEFFS(SHL_LMAX_MAX) };
-
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
 
 static double band_k(int l) { return sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); }
 

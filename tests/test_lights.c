@@ -9,8 +9,6 @@
 #include <math.h>
 #include <string.h>
 
-extern long shl__alloc_fail_after;
-
 enum { LMAX = 6, NC = SHL_NCOEFFS(LMAX), NLIGHTS = 5 };
 
 /* A fixed random scene: NLIGHTS polygons (3..6 vertices, one concave) around the origin. */

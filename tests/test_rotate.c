@@ -6,10 +6,9 @@
 #include "rotutil.h"
 #include "shlight.h"
 #include <math.h>
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 enum { L = SHL_LMAX_MAX, NC = SHL_NCOEFFS(SHL_LMAX_MAX) };
-
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
 
 static void random_coeffs(rng_t *r, double *c, int n)
 {

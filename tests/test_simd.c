@@ -13,8 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
-
 enum { LMAX = 14, NC = SHL_NCOEFFS(LMAX), NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX), MAXPTS = 40 };
 
 /* A polygon (float) and points. */

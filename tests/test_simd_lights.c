@@ -11,7 +11,7 @@
 #include <math.h>
 #include <string.h>
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 enum { MAXPTS = 150 };
 

@@ -12,7 +12,7 @@
 #include <float.h>
 #include <math.h>
 
-extern long shl__alloc_fail_after; /* src/alloc.c, built with SHL_ALLOC_HOOKS */
+#include "internal.h" /* shl__alloc_fail_after (src/alloc.c, built with SHL_ALLOC_HOOKS) */
 
 /* ---------------------------------------------------------------- spheres */
 

@@ -18,7 +18,7 @@
 # empty HOME and a bare environment (env -i, PATH=/usr/local/bin:/usr/bin:/bin), as
 # user nobody when started as root: the commands must work without root.  Each
 # block's last status is checked too (bash -e does not stop inside `a && b`).
-# Afterwards no file may be left under HOME (README's own `make uninstall` must
+# Afterwards no file or symlink may be left under HOME (README's own `make uninstall` must
 # remove what its `make install` wrote).  Every C block is also compiled with
 # -std=c11 -Wall -Wextra -Wpedantic -Werror (extra check, not a README command).
 # Also: the Layout section names every file of src/ and tools/ and each simd/*.h.
@@ -101,7 +101,7 @@ fi
 echo "== README commands, verbatim, as $who, in a copy of the repository"
 (cd "$repo" && "${run[@]}") || { echo "check_readme: README commands failed"; exit 1; }
 
-left=$(cd "$tmp/home" && find . -type f)
+left=$(cd "$tmp/home" && find . ! -type d)   # files and symlinks
 if [ -n "$left" ]; then
     echo "check_readme: README's commands left files under HOME:"; echo "$left"; exit 1
 fi

@@ -23,8 +23,8 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* The library is built with -DSHL_ALLOC_HOOKS for the fuzzers (src/alloc.c). */
-extern long shl__alloc_fail_after;
+/* shl__alloc_fail_after: the library is built with -DSHL_ALLOC_HOOKS for the fuzzers. */
+#include "internal.h"
 
 /* ---- failure reporting ------------------------------------------------- */
 static const char *fz_target_name = "fuzz";
