@@ -4,6 +4,7 @@
  * entry points (*_mt) equal their plain calls bit for bit for any thread count. */
 #include "geom.h"
 #include "harness.h"
+#include "internal.h" /* shl__thread_fail_after: the test hook of the SHL_ALLOC_HOOKS build */
 #include "shlight.h"
 #include <pthread.h>
 #include <string.h>
@@ -65,7 +66,6 @@ SHL_TEST(threads_shared_ctx_bit_identical)
 
 /* ---- threaded batch entry points (the *_mt calls) ---- */
 
-extern long shl__thread_fail_after; /* src/parallel.c, built with SHL_ALLOC_HOOKS */
 
 enum { BL = 4, BNC = SHL_NCOEFFS(BL), NS = 1000, NL = 300, ND = 40 }; /* NS: 4 blocks of 256; NL: 5 blocks of 64 */
 
