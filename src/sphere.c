@@ -5,15 +5,19 @@
 
 #define REAL double
 #define SUFFIX(name) name##_d
+#define TAB(name) shl__sh_##name##_d
 #include "sphere_impl.h"
 #undef REAL
 #undef SUFFIX
+#undef TAB
 
 #define REAL float
 #define SUFFIX(name) name##_f
+#define TAB(name) shl__sh_##name##_f
 #include "sphere_impl.h"
 #undef REAL
 #undef SUFFIX
+#undef TAB
 
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius)

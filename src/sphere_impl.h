@@ -1,5 +1,6 @@
 /* Spherical-light kernels, instantiated by sphere.c for REAL = double and float;
- * SUFFIX(name) names the instance (the SH basis kernels are in sh_basis_impl.h). */
+ * SUFFIX(name) names the instance, TAB(name) its factor table (sh_tables.c); the
+ * SH basis kernels are in sh_basis_impl.h. */
 
 void SUFFIX(shl__cap_weights)(int lmax, REAL t, REAL s2, REAL c, REAL *w, REAL *dw)
 {
@@ -9,10 +10,11 @@ void SUFFIX(shl__cap_weights)(int lmax, REAL t, REAL s2, REAL c, REAL *w, REAL *
     REAL p_prev = 1, p = c, dp_prev = 0, dp = 1; /* P_{l-1}, P_l, P'_{l-1}, P'_l at l = 1 */
     for (int l = 1; l <= lmax; ++l) {
         /* HVL Eq. (13)-(14): 2 pi int_c^1 P_l = 2 pi (P_{l-1}(c) - P_{l+1}(c)) / (2l+1)
-         * = 2 pi (1 - c^2) P_l'(c) / (l(l+1)): no cancellation as a -> 0 */
-        w[l] = two_pi * s2 * dp / (REAL)(l * (l + 1.0));
+         * = 2 pi (1 - c^2) P_l'(c) / (l(l+1)): no cancellation as a -> 0; factors
+         * tabulated (sh_tables.c), so no division waits in the P_l chain */
+        w[l] = TAB(capk)[l] * s2 * dp;
         if (dw) dw[l] = -two_pi * p; /* d/dc of 2 pi int_c^1 P_l */
-        const REAL p_next = ((REAL)(2 * l + 1) * c * p - (REAL)l * p_prev) / (REAL)(l + 1);
+        const REAL p_next = TAB(lega)[l] * c * p - TAB(legb)[l] * p_prev;
         const REAL dp_next = dp_prev + (REAL)(2 * l + 1) * p; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
         p_prev = p;
         p = p_next;

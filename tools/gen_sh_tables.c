@@ -8,7 +8,10 @@
  *   N_l^m     = a_lm (z N_{l-1}^m - b_lm N_{l-2}^m)  (l >= m+2),
  *   a_lm      = sqrt((4l^2 - 1) / (l^2 - m^2)),  b_lm = sqrt(((l-1)^2 - m^2) / (4(l-1)^2 - 1)),
  *   dN_l^m/dz = dz_lm N_l^{m+1},  dz_lm = -sqrt((l-m)(l+m+1)),
- * and k15[l] = sqrt(4 pi / (2l+1)) (HVL Eq. (15)).  Triangular index
+ * k15[l] = sqrt(4 pi / (2l+1)) (HVL Eq. (15)), and for the cap weights of
+ * sphere_impl.h (HVL Eq. (13)-(14)) the Legendre recurrence
+ * P_{l+1} = lega[l] c P_l - legb[l] P_{l-1}, lega = (2l+1)/(l+1), legb = l/(l+1),
+ * and capk[l] = 2 pi / (l (l+1)) (0 at l = 0).  Triangular index
  * l (l+1) / 2 + m (b = 0 where undefined).  Every factor is computed with the
  * same double operations as the per-call code it replaced (float: rounded from
  * them, the diagonal product taken in float), so the basis values are unchanged
@@ -44,6 +47,7 @@ static void emit(const char *type, const char *name, const char *size, const dou
 int main(void)
 {
     static double a[NTRI], b[NTRI], dz[NTRI], diag[L + 1], diag_f[L + 1], k15[L + 1];
+    static double lega[L + 1], legb[L + 1], capk[L + 1];
     float df = (float)sqrt(0.25 / M_PI);
     diag[0] = sqrt(0.25 / M_PI);
     diag_f[0] = df;
@@ -54,6 +58,9 @@ int main(void)
     }
     for (int l = 0; l <= L; ++l) {
         k15[l] = sqrt(4.0 * M_PI / (2.0 * l + 1.0));
+        lega[l] = (2.0 * l + 1.0) / (l + 1.0);
+        legb[l] = l / (l + 1.0);
+        capk[l] = l > 0 ? 2.0 * M_PI / (l * (l + 1.0)) : 0.0;
         for (int m = 0; m <= l; ++m) {
             const int t = l * (l + 1) / 2 + m;
             const double l2 = (double)l * l, m2 = (double)m * m;
@@ -71,10 +78,16 @@ int main(void)
     emit("double", "shl__sh_b_d", "SHL__SH_NTRI", b, NTRI);
     emit("double", "shl__sh_dz_d", "SHL__SH_NTRI", dz, NTRI);
     emit("double", "shl__sh_k15_d", "SHL_LMAX_MAX + 1", k15, L + 1);
+    emit("double", "shl__sh_lega_d", "SHL_LMAX_MAX + 1", lega, L + 1);
+    emit("double", "shl__sh_legb_d", "SHL_LMAX_MAX + 1", legb, L + 1);
+    emit("double", "shl__sh_capk_d", "SHL_LMAX_MAX + 1", capk, L + 1);
     emit("float", "shl__sh_diag_f", "SHL_LMAX_MAX + 1", diag_f, L + 1);
     emit("float", "shl__sh_a_f", "SHL__SH_NTRI", a, NTRI);
     emit("float", "shl__sh_b_f", "SHL__SH_NTRI", b, NTRI);
     emit("float", "shl__sh_dz_f", "SHL__SH_NTRI", dz, NTRI);
     emit("float", "shl__sh_k15_f", "SHL_LMAX_MAX + 1", k15, L + 1);
+    emit("float", "shl__sh_lega_f", "SHL_LMAX_MAX + 1", lega, L + 1);
+    emit("float", "shl__sh_legb_f", "SHL_LMAX_MAX + 1", legb, L + 1);
+    emit("float", "shl__sh_capk_f", "SHL_LMAX_MAX + 1", capk, L + 1);
     return 0;
 }
