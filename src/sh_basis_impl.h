@@ -30,64 +30,154 @@ static void SUFFIX(azimuth)(int lmax, REAL x, REAL y, REAL *sc, REAL *ss)
     }
 }
 
+/* Band l >= 2 of N from bands l-1 (q1) and l-2 (q2) into ql; t = l (l+1)/2.
+ * The m-columns are independent: written as pairs on disjoint (restrict) rows,
+ * so the compiler can step two columns per vector instruction (SSE2/NEON at -O2)
+ * with the same rounding as scalar code.  At m = l-1 the pair loop reads row
+ * l-1's first entry through q2 with b = 0, then the m = l-1 entry is set in the
+ * exact form of the recurrence. */
+static inline void SUFFIX(band)(int l, int t, REAL z, const REAL *restrict q1, const REAL *restrict q2,
+                                REAL *restrict ql)
+{
+    const REAL *restrict a = TAB(a) + t, *restrict b = TAB(b) + t;
+    for (int m = 0; m < l - 1; m += 2) {
+        ql[m] = a[m] * (z * q1[m] - b[m] * q2[m]);
+        ql[m + 1] = a[m + 1] * (z * q1[m + 1] - b[m + 1] * q2[m + 1]);
+    }
+    ql[l - 1] = a[l - 1] * z * q1[l - 1];
+    ql[l] = TAB(diag)[l];
+}
+
+/* band() fused with band l's outputs yc[m] = wl N_l^m sqrt2 C_m, yc[-m] = wl N_l^m sqrt2 S_m
+ * (yc[0] = wl N_l^0), so that they are formed from registers.  Pairs start at m = 1
+ * here: every band of eval_w stores and reloads its rows at the same offsets (store
+ * forwarding). */
+static inline void SUFFIX(band_y)(int l, int t, REAL z, REAL wl, const REAL *restrict q1,
+                                  const REAL *restrict q2, REAL *restrict ql, const REAL *restrict sc,
+                                  const REAL *restrict ss, REAL *restrict yc)
+{
+    const REAL *restrict a = TAB(a) + t, *restrict b = TAB(b) + t;
+    const REAL n0 = a[0] * (z * q1[0] - b[0] * q2[0]);
+    ql[0] = n0;
+    yc[0] = wl * n0;
+    int m = 1;
+    for (; m < l - 2; m += 2) {
+        const REAL n1 = a[m] * (z * q1[m] - b[m] * q2[m]);
+        const REAL n2 = a[m + 1] * (z * q1[m + 1] - b[m + 1] * q2[m + 1]);
+        ql[m] = n1;
+        ql[m + 1] = n2;
+        const REAL v1 = wl * n1, v2 = wl * n2;
+        yc[m] = v1 * sc[m];
+        yc[m + 1] = v2 * sc[m + 1];
+        yc[-m] = v1 * ss[m];
+        yc[-m - 1] = v2 * ss[m + 1];
+    }
+    if (m == l - 2) {
+        const REAL n = a[m] * (z * q1[m] - b[m] * q2[m]), v = wl * n;
+        ql[m] = n;
+        yc[m] = v * sc[m];
+        yc[-m] = v * ss[m];
+    }
+    const REAL n1 = a[l - 1] * z * q1[l - 1], v1 = wl * n1, vd = wl * TAB(diag)[l];
+    ql[l - 1] = n1;
+    ql[l] = TAB(diag)[l];
+    yc[l - 1] = v1 * sc[l - 1];
+    yc[1 - l] = v1 * ss[l - 1];
+    yc[l] = vd * sc[l];
+    yc[-l] = vd * ss[l];
+}
+
 /* N_l^m for l <= lmax into q[l (l+1)/2 + m]. */
 static void SUFFIX(legendre)(int lmax, REAL z, REAL *q)
 {
     q[0] = TAB(diag)[0];
-    for (int l = 1; l <= lmax; ++l) {
+    if (lmax == 0) return;
+    q[1] = TAB(a)[1] * z * q[0];
+    q[2] = TAB(diag)[1];
+    for (int l = 2; l <= lmax; ++l) {
         const int t = l * (l + 1) / 2;
-        const REAL *a = TAB(a) + t, *b = TAB(b) + t, *q1 = q + t - l, *q2 = q + t - 2 * l + 1;
-        REAL *ql = q + t;
-        for (int m = 0; m < l - 1; ++m) ql[m] = a[m] * (z * q1[m] - b[m] * q2[m]);
-        ql[l - 1] = a[l - 1] * z * q1[l - 1];
-        ql[l] = TAB(diag)[l];
+        SUFFIX(band)(l, t, z, q + t - l, q + t - 2 * l + 1, q + t);
     }
 }
 
-/* y[l(l+1)+m] = w[l] Y_lm(u) for a unit vector u, l <= lmax; w == NULL: w[l] = 1. */
+/* Columns m and m+1 of y = w Y from band m+2 on, given N_{m+1}^m (n1a), N_m^m (n2a),
+ * N_{m+1}^{m+1} (n1b); column m's output factors sca, ssa (1 and 0 for m = 0, whose
+ * "negative" store is then overwritten).  The two recurrences run in lockstep with
+ * their values in registers; adjacent table entries and outputs, so the compiler
+ * can run both columns in one vector. */
+static void SUFFIX(column_pair)(int m, int lmax, REAL z, const REAL *restrict w, REAL n1a, REAL n2a, REAL n1b,
+                                REAL sca, REAL ssa, REAL scb, REAL ssb, REAL *restrict y)
+{
+    int l = m + 2;
+    if (l > lmax) return;
+    const REAL *a = TAB(a) + l * (l + 1) / 2 + m, *b = TAB(b) + l * (l + 1) / 2 + m;
+    REAL *yc = y + l * (l + 1);
+    REAL n2b;
+    {
+        const REAL na = a[0] * (z * n1a - b[0] * n2a), nb = a[1] * z * n1b; /* N_{m+2}^{m+1} = a z N */
+        n2a = n1a, n1a = na, n2b = n1b, n1b = nb;
+        const REAL va = w[l] * na, vb = w[l] * nb;
+        yc[-m] = va * ssa, yc[-m - 1] = vb * ssb, yc[m] = va * sca, yc[m + 1] = vb * scb;
+    }
+    for (++l; l <= lmax; ++l) {
+        a += l, b += l, yc += 2 * l;
+        const REAL na = a[0] * (z * n1a - b[0] * n2a), nb = a[1] * (z * n1b - b[1] * n2b);
+        n2a = n1a, n1a = na, n2b = n1b, n1b = nb;
+        const REAL va = w[l] * na, vb = w[l] * nb;
+        yc[-m] = va * ssa, yc[-m - 1] = vb * ssb, yc[m] = va * sca, yc[m + 1] = vb * scb;
+    }
+}
+
+/* y[l(l+1)+m] = w[l] Y_lm(u) for a unit vector u, l <= lmax; w == NULL: w[l] = 1.
+ * Up to band SHL__SH_COLUMNS the m-columns run in pairs with their values in
+ * registers (short columns: the overlapping pairs hide each step's latency); above,
+ * band by band with two columns per step (long columns would serialize on their
+ * latency chains).  Both give the same values bit for bit. */
+#ifndef SHL__SH_COLUMNS
+#define SHL__SH_COLUMNS 16
+#endif
 void SUFFIX(shl__sh_eval_w)(int lmax, const REAL u[3], const REAL *w, REAL *y)
 {
     const REAL z = u[2];
-    REAL q[SHL__SH_NTRI], sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1];
+    REAL sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1];
+    if (!w) w = TAB(one);
     SUFFIX(azimuth)(lmax, u[0], u[1], sc, ss);
-    y[0] = (w ? w[0] : 1) * TAB(diag)[0];
+    y[0] = w[0] * TAB(diag)[0];
     if (lmax == 0) return;
-    /* bands 1 and 2 unrolled; the generic band loop from band 3 on */
-    const REAL q10 = TAB(a)[1] * z * TAB(diag)[0], q11 = TAB(diag)[1];
-    const REAL w1 = w ? w[1] : 1, v11 = w1 * q11;
+    const REAL q10 = TAB(a)[1] * z * TAB(diag)[0];
+    y[2] = w[1] * q10;
+    const REAL q11 = TAB(diag)[1], v11 = w[1] * q11;
     y[1] = v11 * ss[1];
-    y[2] = w1 * q10;
     y[3] = v11 * sc[1];
-    if (lmax == 1) return;
-    const REAL q20 = TAB(a)[3] * (z * q10 - TAB(b)[3] * TAB(diag)[0]), q21 = TAB(a)[4] * z * q11;
-    const REAL q22 = TAB(diag)[2], w2 = w ? w[2] : 1, v21 = w2 * q21, v22 = w2 * q22;
-    y[4] = v22 * ss[2];
-    y[5] = v21 * ss[1];
-    y[6] = w2 * q20;
-    y[7] = v21 * sc[1];
-    y[8] = v22 * sc[2];
-    q[0] = TAB(diag)[0], q[1] = q10, q[2] = q11, q[3] = q20, q[4] = q21, q[5] = q22;
-    for (int l = 3; l <= lmax; ++l) {
-        const int t = l * (l + 1) / 2;
-        const REAL *a = TAB(a) + t, *b = TAB(b) + t, *q1 = q + t - l, *q2 = q + t - 2 * l + 1;
-        REAL *ql = q + t, *yc = y + l * (l + 1);
-        const REAL wl = w ? w[l] : 1;
-        const REAL n0 = a[0] * (z * q1[0] - b[0] * q2[0]);
-        ql[0] = n0;
-        yc[0] = wl * n0;
-        for (int m = 1; m < l - 1; ++m) {
-            const REAL n = a[m] * (z * q1[m] - b[m] * q2[m]), v = wl * n;
-            ql[m] = n;
-            yc[m] = v * sc[m];
-            yc[-m] = v * ss[m];
+    if (lmax > SHL__SH_COLUMNS) {
+        REAL q[SHL__SH_NTRI];
+        const REAL q20 = TAB(a)[3] * (z * q10 - TAB(b)[3] * TAB(diag)[0]), q21 = TAB(a)[4] * z * q11;
+        const REAL q22 = TAB(diag)[2], v21 = w[2] * q21, v22 = w[2] * q22;
+        y[4] = v22 * ss[2];
+        y[5] = v21 * ss[1];
+        y[6] = w[2] * q20;
+        y[7] = v21 * sc[1];
+        y[8] = v22 * sc[2];
+        q[0] = TAB(diag)[0], q[1] = q10, q[2] = q11, q[3] = q20, q[4] = q21, q[5] = q22;
+        for (int l = 3; l <= lmax; ++l) {
+            const int t = l * (l + 1) / 2;
+            SUFFIX(band_y)(l, t, z, w[l], q + t - l, q + t - 2 * l + 1, q + t, sc, ss, y + l * (l + 1));
         }
-        const REAL n1 = a[l - 1] * z * q1[l - 1], v1 = wl * n1, vd = wl * TAB(diag)[l];
-        ql[l - 1] = n1;
-        ql[l] = TAB(diag)[l];
-        yc[l - 1] = v1 * sc[l - 1];
-        yc[1 - l] = v1 * ss[l - 1];
-        yc[l] = vd * sc[l];
-        yc[-l] = vd * ss[l];
+        return;
+    }
+    /* columns 0 and 1 (bands 0 and 1 above), then m, m+1 for m = 2, 4, ...: bands m
+     * and m+1 here, the rest in column_pair */
+    SUFFIX(column_pair)(0, lmax, z, w, q10, TAB(diag)[0], q11, 1, 0, sc[1], ss[1], y);
+    for (int m = 2; m <= lmax; m += 2) {
+        const REAL dm = TAB(diag)[m], vm = w[m] * dm;
+        y[m * (m + 1) + m] = vm * sc[m];
+        y[m * (m + 1) - m] = vm * ss[m];
+        if (m == lmax) break;
+        const int l = m + 1, t = l * (l + 1) / 2;
+        const REAL n1a = TAB(a)[t + m] * z * dm, dn = TAB(diag)[l], va = w[l] * n1a, vb = w[l] * dn;
+        REAL *yc = y + l * (l + 1);
+        yc[m] = va * sc[m], yc[-m] = va * ss[m], yc[l] = vb * sc[l], yc[-l] = vb * ss[l];
+        SUFFIX(column_pair)(m, lmax, z, w, n1a, dm, dn, sc[m], ss[m], sc[l], ss[l], y);
     }
 }
 
