@@ -439,6 +439,137 @@ static void compare_section(FILE *csv)
            worst <= 1e-12 ? "within" : "NOT within");
 }
 
+/* Float stand-in for DirectXSH's XMSHEvalSphericalLight (float, lmax <= 5: closed-form
+ * cap ZH and generated per-band polynomials): the plain implementation in float with
+ * lmax a compile-time constant, so that the compiler folds the constants and unrolls
+ * every loop into straight-line code. */
+typedef struct {
+    float a[6][6], b[6][6], diag[6], sub[6], lega[6], legb[6], kw[6];
+} closed_tab_f;
+static closed_tab_f ctf;
+
+static void closed_init(void)
+{
+    for (int m = 0; m <= 5; ++m) {
+        ctf.diag[m] = (float)(m ? -sqrt((2.0 * m + 1.0) / (2.0 * m)) : sqrt(0.25 / M_PI));
+        ctf.sub[m] = (float)sqrt(2.0 * m + 3.0);
+        for (int l = m + 2; l <= 5; ++l) {
+            ctf.a[m][l] = (float)sqrt((4.0 * l * l - 1.0) / ((double)l * l - (double)m * m));
+            ctf.b[m][l] = (float)sqrt(((l - 1.0) * (l - 1.0) - (double)m * m) / (4.0 * (l - 1.0) * (l - 1.0) - 1.0));
+        }
+        ctf.lega[m] = (float)((2.0 * m + 1.0) / (m + 1.0));
+        ctf.legb[m] = (float)(m / (m + 1.0));
+        ctf.kw[m] = (float)(m ? 2.0 * M_PI / (m * (m + 1.0)) : 0.0);
+    }
+}
+
+static inline void closed_sphere_f(const int L, const float x[3], const float center[3], float radius, float *out)
+{
+    float u[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    const float d2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], inv = 1.0f / sqrtf(d2);
+    for (int k = 0; k < 3; ++k) u[k] *= inv;
+    const float s = radius * inv, s2 = s * s, c = sqrtf(1.0f - s2);
+    float w[6], pp = 1.0f, pc = c, dpp = 0.0f, dpc = 1.0f;
+    w[0] = 2.0f * (float)M_PI * s2 / (1.0f + c);
+    for (int l = 1; l <= L; ++l) {
+        w[l] = ctf.kw[l] * s2 * dpc;
+        const float pn = ctf.lega[l] * c * pc - ctf.legb[l] * pp, dpn = dpp + (2 * l + 1) * pc;
+        pp = pc, pc = pn, dpp = dpc, dpc = dpn;
+    }
+    const float z = u[2];
+    float cm = 1.0f, sm = 0.0f, pmm = ctf.diag[0];
+    for (int m = 0; m <= L; ++m) {
+        if (m > 0) {
+            pmm *= ctf.diag[m];
+            const float cn = cm * u[0] - sm * u[1]; /* sin^m theta (cos m phi, sin m phi) */
+            sm = sm * u[0] + cm * u[1];
+            cm = cn;
+        }
+        float p2 = 0.0f, p1 = pmm;
+        for (int l = m; l <= L; ++l) {
+            const float pl = l == m ? pmm : l == m + 1 ? ctf.sub[m] * z * pmm : ctf.a[m][l] * (z * p1 - ctf.b[m][l] * p2);
+            if (l > m) p2 = p1, p1 = pl;
+            if (m == 0) {
+                out[l * (l + 1)] = w[l] * pl;
+            } else {
+                const float f = (float)M_SQRT2 * w[l] * pl;
+                out[l * (l + 1) + m] = f * cm;
+                out[l * (l + 1) - m] = f * sm;
+            }
+        }
+    }
+}
+
+static void closed_f2(const float x[3], const float center[3], float radius, float *out)
+{
+    closed_sphere_f(2, x, center, radius, out);
+}
+
+static void closed_f5(const float x[3], const float center[3], float radius, float *out)
+{
+    closed_sphere_f(5, x, center, radius, out);
+}
+
+static void run_closed_f(void *p)
+{
+    job *j = p;
+    void (*f)(const float *, const float *, float, float *) = j->lmax == 2 ? closed_f2 : closed_f5;
+    for (long i = 0; i < j->inner; ++i) {
+        f(j->xf[i % NPTS], j->centerf, (float)j->radius, shf);
+        bench_sink += shf[1];
+    }
+}
+
+/* shl_sphere_f against the float closed-form stand-in at lmax 2 and 5, interleaved as above. */
+static void compare_float_section(FILE *csv)
+{
+    static const int lmaxs[2] = {2, 5};
+    static job jobs[2];
+    static double t[2][2][NROUND];
+    shl_ctx *ctx[2];
+    long inner[2][2];
+    double agree[2];
+    void (*const fns[2])(void *) = {run_sphere_f, run_closed_f};
+    closed_init();
+    for (int i = 0; i < 2; ++i) {
+        shl_ctx_create(lmaxs[i], &ctx[i]);
+        setup(&jobs[i], ctx[i]);
+        float ref[36];
+        double worst = 0.0, big = 0.0;
+        for (int q = 0; q < NPTS; ++q) {
+            shl_sphere_f(ctx[i], jobs[i].xf[q], jobs[i].centerf, (float)jobs[i].radius, shf);
+            (lmaxs[i] == 2 ? closed_f2 : closed_f5)(jobs[i].xf[q], jobs[i].centerf, (float)jobs[i].radius, ref);
+            for (int k = 0; k < SHL_NCOEFFS(lmaxs[i]); ++k)
+                worst = fmax(worst, fabs((double)shf[k] - ref[k])), big = fmax(big, fabs((double)ref[k]));
+        }
+        agree[i] = worst / big;
+        for (int k = 0; k < 2; ++k) {
+            jobs[i].inner = 1;
+            const double t0 = bench_now();
+            long n = 0;
+            while (bench_now() - t0 < 0.002) fns[k](&jobs[i]), ++n;
+            inner[i][k] = (long)fmax(1.0, 0.0005 * n / (bench_now() - t0));
+        }
+    }
+    for (int r = 0; r < NROUND; ++r)
+        for (int i = 0; i < 2; ++i)
+            for (int k = 0; k < 2; ++k) {
+                jobs[i].inner = inner[i][k];
+                t[k][i][r] = bench_run(fns[k], &jobs[i], inner[i][k], 5).min;
+            }
+    printf("\n## shl_sphere_f vs a float closed form (stand-in for DirectXSH's XMSHEvalSphericalLight)\n\n");
+    printf("Same protocol as above.  'closed form': the plain implementation in float with lmax a "
+           "compile-time constant (constants folded, loops unrolled), no argument checks.\n\n");
+    printf("| lmax | shl_sphere_f ns | closed form ns | closed / shl_sphere_f | max|diff| / max|coeff| |\n");
+    printf("|---|---|---|---|---|\n");
+    for (int i = 0; i < 2; ++i) {
+        const double ms = bench_median(t[0][i], NROUND), mc = bench_median(t[1][i], NROUND);
+        printf("| %d | %.0f | %.0f | %.2f | %.1e |\n", lmaxs[i], ms * 1e9, mc * 1e9, mc / ms, agree[i]);
+        if (csv) fprintf(csv, "compare_f,%d,,,,,,,,,,,,%.1f,,%.1f,%.3f,%.1e,,,,\n", lmaxs[i] + 1, ms * 1e9, mc * 1e9, mc / ms, agree[i]);
+        shl_ctx_destroy(ctx[i]);
+    }
+}
+
 static long count_ops(int which, int lmax)
 {
     double z[SHL_LMAX_MAX + 1];
@@ -479,6 +610,7 @@ int main(int argc, char **argv)
     if (compare_only) {
         bench_progress("shl_sphere vs plain implementation, basis kernel vs former (about 5 s)...");
         compare_section(csv);
+        compare_float_section(csv);
         if (fclose(csv)) return 1;
         bench_progress("done; wrote %s", csv_path);
         return 0;
@@ -565,6 +697,7 @@ int main(int argc, char **argv)
            bench_loglog_slope(xs, ys, n), rmin, rmax);
     bench_progress("shl_sphere vs plain implementation, basis kernel vs former (step 3/3)...");
     compare_section(csv);
+    compare_float_section(csv);
     printf("\n(checksum %g)\n", (double)bench_sink);
     if (fclose(csv)) return 1;
     bench_progress("done; wrote %s", csv_path);

@@ -52,7 +52,7 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     } else if (vs[0] == 0.0 && vs[1] == 0.0 && vs[2] == 0.0) {
         return; /* centre at x */
     }
-    const double ds = sqrt(shl__dot3(vs, vs)), rs = shl__ldexp(radius, -e);
+    const double ds = sqrt(shl__dot3(vs, vs)), rs = e ? shl__ldexp(radius, -e) : radius;
     if (ds <= rs) return;
     g->inside = 0;
     const double inv = 1.0 / ds; /* one division for u, sin a, cos a (each within 1.5 ulp) */
@@ -63,6 +63,12 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
     g->inv_d_s = inv;
     g->k_alpha_s = g->s2 / g->c * inv;                 /* d cos a / dd = sin^2 a / (d cos a) */
+    if (!e) {
+        g->grad_scale[0] = g->grad_scale[1] = 1.0;
+        g->inv_d = g->inv_d_s;
+        g->k_alpha = g->k_alpha_s;
+        return;
+    }
     shl__pow2_split(-e, g->grad_scale);                /* d/dx = 2^-e d/dx_scaled */
     g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
     g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
