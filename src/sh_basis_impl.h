@@ -4,9 +4,11 @@
  *
  * N_l^m = K_lm P_l^m(z) / sin^m(theta) (a polynomial in z, Condon-Shortley sign
  * included) and C_m + i S_m = (x + i y)^m give Y_l0 = N_l^0,
- * Y_lm = sqrt2 N_l^m C_m, Y_l,-m = sqrt2 N_l^m S_m.  The N recurrence runs band
- * by band: the m-columns of one band are independent, so their steps overlap
- * instead of waiting on each other, and every factor comes from the tables.
+ * Y_lm = sqrt2 N_l^m C_m, Y_l,-m = sqrt2 N_l^m S_m.  Every factor comes from the
+ * tables; the m-columns are independent, so their recurrences run side by side
+ * (two per vector step) instead of one after another: in register pairs up to band
+ * SHL__SH_COLUMNS, band by band above (shl__sh_eval_w), with the operations of the
+ * former per-call recurrence in the same order (values unchanged bit for bit).
  *
  * Gradient: g(x,y,z) = sqrt2 N_l^m(z) C_m(x,y) equals Y_lm on the unit sphere, with
  *   d C_m/dx = m C_{m-1},  d C_m/dy = -m S_{m-1},  d S_m/dx = m S_{m-1},
