@@ -185,9 +185,18 @@ check-csv:
 lobes: $(BUILD)/tools/gen_lobes
 	$(BUILD)/tools/gen_lobes > src/zh_tables.c.new && mv src/zh_tables.c.new src/zh_tables.c
 
-$(BUILD)/tools/gen_lobes: tools/gen_lobes.c src/sh_basis.c
+$(BUILD)/tools/gen_lobes: tools/gen_lobes.c src/sh_basis.c src/sh_tables.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CSTD) -O2 $(WARN) -Iinclude -Isrc -o $@ tools/gen_lobes.c src/sh_basis.c -lm
+	$(CC) $(CSTD) -O2 $(WARN) -Iinclude -Isrc -o $@ tools/gen_lobes.c src/sh_basis.c src/sh_tables.c -lm
+
+# Regenerate the real-SH recurrence tables -- see tools/gen_sh_tables.c.
+.PHONY: sh-tables
+sh-tables: $(BUILD)/tools/gen_sh_tables
+	$(BUILD)/tools/gen_sh_tables > src/sh_tables.c.new && mv src/sh_tables.c.new src/sh_tables.c
+
+$(BUILD)/tools/gen_sh_tables: tools/gen_sh_tables.c include/shlight.h
+	@mkdir -p $(dir $@)
+	$(CC) $(CSTD) -O2 $(WARN) -Iinclude -o $@ tools/gen_sh_tables.c -lm
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/lib/pkgconfig
@@ -339,6 +348,7 @@ help:
 	@printf '  %-19s %-64s %s\n' install 'all + header, .a, .so + 2 symlinks, .pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'
 	@printf '  %-19s %-64s %s\n' uninstall 'remove exactly those 6 entries (same PREFIX and DESTDIR)' '<1 s'
 	@printf '  %-19s %-64s %s\n' lobes 'regenerate src/zh_tables.c with tools/gen_lobes' '1-2.5 min'
+	@printf '  %-19s %-64s %s\n' sh-tables 'regenerate src/sh_tables.c with tools/gen_sh_tables' '1 s'
 	@printf '  %-19s %-64s %s\n' clean 'remove $$(BUILD)' '<1 s'
 	@printf '  %-19s %-64s %s\n' fuzz 'libFuzzer targets x FUZZ_SECONDS (60) each, ASan + UBSan' '~1 min build + 8 min'
 	@printf '  %-19s %-64s %s\n' fuzz-build 'build the fuzz binaries with clang into $$(BUILD)/fuzz/' '~1 min'

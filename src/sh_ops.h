@@ -6,11 +6,16 @@
 #include "internal.h"
 #include <math.h>
 
-/* ---- spherical caps and lights (sphere.c) ------------------------------ */
+/* ---- SH basis (sh_basis.c) ----------------------------------------------- */
+/* y[l(l+1)+m] = w[l] Y_lm(u) for a unit vector u, l <= lmax (w == NULL: 1). */
+void shl__sh_eval_w_d(int lmax, const double u[3], const double *w, double *y);
+void shl__sh_eval_w_f(int lmax, const float u[3], const float *w, float *y);
 /* Y_lm(u) for a unit vector u into y[(lmax+1)^2] and, when grad != NULL, the
  * surface gradient grad[a*stride + k] = d/du_a of Y_k(u/|u|) at |u| = 1. */
 void shl__sh_eval_grad_d(int lmax, const double u[3], double *y, double *grad, int stride);
 void shl__sh_eval_grad_f(int lmax, const float u[3], float *y, float *grad, int stride);
+
+/* ---- spherical caps and lights (sphere.c) ------------------------------ */
 
 /* Funk-Hecke factors of the cap {w : axis . w >= cos a}: the integral of Y_lm
  * over it is w[l] Y_lm(axis), w[l] = 2 pi int_{cos a}^1 P_l(u) du (its ZH is

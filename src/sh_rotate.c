@@ -123,13 +123,9 @@ int shl_zh_to_sh(int lmax, const double *zh, const double axis[3], double *sh)
     double u[3];
     const int st = shl__unit(axis, u);
     if (st) return st;
-    double zl[SHL_LMAX_MAX + 1];
-    for (int l = 0; l <= lmax; ++l) zl[l] = zh[l]; /* zh may alias the start of sh */
-    shl__sh_eval(lmax, u[0], u[1], u[2], sh);
-    for (int l = 0; l <= lmax; ++l) {
-        const double f = sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * zl[l]; /* HVL Eq. (15) */
-        for (int k = l * l; k < (l + 1) * (l + 1); ++k) sh[k] *= f;
-    }
+    double f[SHL_LMAX_MAX + 1]; /* zh may alias the start of sh */
+    for (int l = 0; l <= lmax; ++l) f[l] = shl__sh_k15_d[l] * zh[l]; /* HVL Eq. (15) */
+    shl__sh_eval_w_d(lmax, u, f, sh);
     return SHL_OK;
 }
 

@@ -5,36 +5,70 @@
 
 #define REAL double
 #define SUFFIX(name) name##_d
+#define TAB(name) shl__sh_##name##_d
 #include "sphere_impl.h"
 #undef REAL
 #undef SUFFIX
+#undef TAB
 
 #define REAL float
 #define SUFFIX(name) name##_f
+#define TAB(name) shl__sh_##name##_f
 #include "sphere_impl.h"
 #undef REAL
 #undef SUFFIX
+#undef TAB
+
+/* Every non-zero |v_k| and a in [2^-100, 2^100]: every product, square and quotient
+ * of the set-up below is a normal double both unscaled and in scaled units, so the
+ * scale 2^0 gives the scaled result bit for bit (a power of two commutes with each
+ * correctly rounded operation) without the exponent extraction. */
+static int moderate(const double v[3], double a)
+{
+    int ok = a >= 0x1p-100 && a <= 0x1p100;
+    for (int k = 0; k < 3; ++k) {
+        const double m = fabs(v[k]);
+        ok &= m == 0.0 || (m >= 0x1p-100 && m <= 0x1p100);
+    }
+    return ok;
+}
 
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius)
 {
-    const int e = shl__scale_exponent(x, center, 1);
     g->inside = 1;
-    if (e == INT_MIN) return; /* centre at x */
-    /* scaled units (internal.h): center - x times 2^-e, largest component in [1, 2);
-     * no overflow in the difference, no overflow or underflow in the norm */
-    const double vs[3] = {shl__diff_scaled(center[0], x[0], -e), shl__diff_scaled(center[1], x[1], -e),
-                          shl__diff_scaled(center[2], x[2], -e)};
-    const double ds = sqrt(shl__dot3(vs, vs)), rs = shl__ldexp(radius, -e);
+    double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    int e = 0;
+    if (!moderate(vs, radius)) {
+        e = INT_MIN;
+        for (int k = 0; k < 3; ++k) {
+            const int ek = shl__ilogb_diff(center[k], x[k]);
+            e = ek > e ? ek : e;
+        }
+        if (e == INT_MIN) return; /* centre at x */
+        /* scaled units (internal.h): center - x times 2^-e, largest component in [1, 2);
+         * no overflow in the difference, no overflow or underflow in the norm */
+        for (int k = 0; k < 3; ++k) vs[k] = shl__diff_scaled(center[k], x[k], -e);
+    } else if (vs[0] == 0.0 && vs[1] == 0.0 && vs[2] == 0.0) {
+        return; /* centre at x */
+    }
+    const double ds = sqrt(shl__dot3(vs, vs)), rs = e ? shl__ldexp(radius, -e) : radius;
     if (ds <= rs) return;
     g->inside = 0;
-    for (int k = 0; k < 3; ++k) g->u[k] = vs[k] / ds;
-    const double s = rs / ds;                          /* sin a */
+    const double inv = 1.0 / ds; /* one division for u, sin a, cos a (each within 1.5 ulp) */
+    for (int k = 0; k < 3; ++k) g->u[k] = vs[k] * inv;
+    const double s = rs * inv;                         /* sin a */
     g->s2 = s * s;
-    g->c = sqrt((ds - rs) * (ds + rs)) / ds;           /* cos a, exact difference ds - rs */
+    g->c = sqrt((ds - rs) * (ds + rs)) * inv;          /* cos a, exact difference ds - rs */
     g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
-    g->inv_d_s = 1.0 / ds;
-    g->k_alpha_s = g->s2 / g->c * g->inv_d_s;          /* d cos a / dd = sin^2 a / (d cos a) */
+    g->inv_d_s = inv;
+    g->k_alpha_s = g->s2 / g->c * inv;                 /* d cos a / dd = sin^2 a / (d cos a) */
+    if (!e) {
+        g->grad_scale[0] = g->grad_scale[1] = 1.0;
+        g->inv_d = g->inv_d_s;
+        g->k_alpha = g->k_alpha_s;
+        return;
+    }
     shl__pow2_split(-e, g->grad_scale);                /* d/dx = 2^-e d/dx_scaled */
     g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
     g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
