@@ -40,43 +40,126 @@ static inline void scaled_sub3(const double a[3], const double b[3], int e, doub
     for (int k = 0; k < 3; ++k) out[k] = shl__diff_scaled(a[k], b[k], e);
 }
 
-/* Unit Newell normal of the polygon (counter-clockwise seen from its tip), from
- * the vertex differences v_i - v_0 scaled by a power of two that brings the
- * largest near 1 (the cross products neither overflow nor underflow); 0 for a
- * zero-area polygon (also vertices equal up to the sign of zero). */
-static int newell_normal(const double *verts, int n, double nrm[3])
+/* Double-double arithmetic (value hi + lo, |lo| <= ulp(hi)/2) for the plane
+ * distance; C11 without FP contraction keeps two_sum exact, fma gives the exact
+ * product error (Ogita, Rump & Oishi 2005, TwoSum / TwoProduct). */
+typedef struct {
+    double hi, lo;
+} dd;
+
+static inline dd two_sum(double a, double b)
+{
+    const double s = a + b, bb = s - a;
+    return (dd){s, (a - (s - bb)) + (b - bb)};
+}
+static inline dd fast_two_sum(double a, double b) /* |a| >= |b| or a == 0 */
+{
+    const double s = a + b;
+    return (dd){s, b - (s - a)};
+}
+static inline dd dd_add(dd x, dd y)
+{
+    const dd s = two_sum(x.hi, y.hi);
+    return fast_two_sum(s.hi, s.lo + x.lo + y.lo);
+}
+static inline dd dd_mul(dd x, dd y)
+{
+    const double p = x.hi * y.hi;
+    return fast_two_sum(p, fma(x.hi, y.hi, -p) + (x.hi * y.lo + x.lo * y.hi));
+}
+static inline dd dd_neg(dd x) { return (dd){-x.hi, -x.lo}; }
+
+/* (a - b) 2^e exactly as a double-double (up to underflow of the low part):
+ * with a != b, |a - b| >= ulp(a) / 2 and |a - b| 2^e <= 2, so neither a 2^e nor
+ * b 2^e overflows. */
+static inline dd dd_diff_scaled(double a, double b, int e)
+{
+    if (a == b) return (dd){0.0, 0.0};
+    if (isinf(a - b)) return (dd){shl__diff_scaled(a, b, e), 0.0}; /* |a|, |b| > 2^969: halves exact, 0.5 a - 0.5 b rounded */
+    const dd s = two_sum(shl__ldexp(a, e), -shl__ldexp(b, e));
+    return s;
+}
+
+/* Newell normal N = sum_i (v_i - v_0) x (v_{i+1} - v_0) (counter-clockwise seen
+ * from its tip), with the vertex differences scaled by 2^-e that brings the
+ * largest near 1 (no over/underflow), in double-double: the differences are
+ * exact, each product carries a relative error <= ~2 eps^2, so N_k is accurate to
+ * ~4 eps^2 sum_i |terms of N_k| (n <= SHL_MAX_VERTS).  Returns the unit normal in
+ * nrm and N itself in big (scale 2^-2e); 0 for a zero-area polygon (also vertices
+ * equal up to the sign of zero). */
+static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], int *escale)
 {
     int e = INT_MIN;
     for (int i = 1; i < n; ++i)
         for (int k = 0; k < 3; ++k) e = imax(e, shl__ilogb_diff(verts[3 * i + k], verts[k]));
     nrm[0] = nrm[1] = nrm[2] = 0.0;
+    big[0] = big[1] = big[2] = (dd){0.0, 0.0};
+    *escale = e;
     if (e == INT_MIN) return 0;
+    dd prev[3];
+    for (int k = 0; k < 3; ++k) prev[k] = dd_diff_scaled(verts[3 + k], verts[k], -e);
     for (int i = 1; i + 1 < n; ++i) {
-        double e1[3], e2[3], c[3];
-        scaled_sub3(verts + 3 * i, verts, -e, e1);
-        scaled_sub3(verts + 3 * (i + 1), verts, -e, e2);
-        cross3(e1, e2, c);
-        for (int k = 0; k < 3; ++k) nrm[k] += c[k];
+        dd next[3];
+        for (int k = 0; k < 3; ++k) next[k] = dd_diff_scaled(verts[3 * (i + 1) + k], verts[k], -e);
+        for (int k = 0; k < 3; ++k) {
+            const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+            big[k] = dd_add(big[k], dd_add(dd_mul(prev[k1], next[k2]), dd_neg(dd_mul(prev[k2], next[k1]))));
+        }
+        memcpy(prev, next, sizeof prev);
     }
-    const double len = norm3(nrm);
+    const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
+    const double len = norm3(hi);
     if (!(len > 0.0)) return 0;
-    for (int k = 0; k < 3; ++k) nrm[k] /= len;
+    for (int k = 0; k < 3; ++k) nrm[k] = hi[k] / len;
     return 1;
+}
+
+/* Signed distance of x from the polygon's plane, along +nrm from x to the plane, in
+ * the scaled units of rel (2^-ex):
+ *   h = N . (v_0 - x) / |N|,
+ * N . (v_0 - x) = sum_i det(v_i - v_0, v_{i+1} - v_0, v_0 - x) in double-double from
+ * exact differences.  Guarantee (any finite input, no underflow): with cond =
+ * sum |each of the 6 (n-2) triple products of coordinate differences| / |N . (v_0 - x)|
+ * (the componentwise condition number of that sum), the relative error is
+ *   |h_computed - h| / |h| <= 3 eps + 16 n eps^2 cond,      eps = 2^-53,
+ * (one rounding of the double-double to double, |N| to 2 eps); cond ~ distance / |h| for
+ * a tilted plane, so h is accurate to a few ulps while |h| >= ~1e-14 x distance.  An
+ * axis-aligned plane is exact (cond = 1). */
+static double plane_height(const double *verts, const double x[3], const dd big[3], int ex)
+{
+    dd acc = {0.0, 0.0};
+    for (int k = 0; k < 3; ++k) acc = dd_add(acc, dd_mul(big[k], dd_diff_scaled(verts[k], x[k], -ex)));
+    const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
+    return acc.hi / norm3(hi); /* N in units 2^-2e of newell_normal: the ratio is in units 2^-ex */
 }
 
 /* Solid angle of the polygon (magnitude) as a fan of Van Oosterom-Strackee
  * triangles, tan(omega/2) = N / D.  Unlike the sum-of-angles formula (Wang 2018
  * Eq. 24) this keeps full relative accuracy for tiny polygons and handles
  * concave ones.  Two fans, each used where its D is a sum of positive terms, so
- * nothing cancels and no term crosses atan2's branch cut:
+ * no term crosses atan2's branch cut:
  *  - far from the plane (|h| >= 2 x extent) the fan from vertex 0: all vertex
  *    directions lie within 60 degrees of each other;
  *  - otherwise the fan from the foot F of x on the plane, where with e_i the
- *    in-plane offsets of the vertices from F and a = |h|, N and D divided by a are
- *    n.(e_i x e_j) and r_i r_j + a (r_i + r_j) + a^2 + e_i.e_j, and for e_i.e_j < 0
- *    r_i r_j + e_i.e_j = (a^4 + a^2 (|e_i|^2 + |e_j|^2) + |e_i x e_j|^2) / (r_i r_j - e_i.e_j). */
+ *    in-plane offsets of the vertices from F, s_i = |e_i|, r_i = |v_i - x| and a = |h|,
+ *    N and D divided by a are n.(e_i x e_j) and r_i r_j + a (r_i + r_j) + a^2 + e_i.e_j,
+ *    and for e_i.e_j < 0  r_i r_j + e_i.e_j = (a^2 (a^2 + s_i^2 + s_j^2) + |e_i x e_j|^2) / (r_i r_j - e_i.e_j).
+ * Near the plane with F outside the polygon the triangle angles omega_i tend to the
+ * planar angles theta_i of the edges at F, which sum to 0: the sum of O(1) terms
+ * cancels down to O(a).  So the fan is also summed as
+ *   omega = 2 pi k + sum_i (omega_i - theta_i),   k = round(sum_i theta_i / 2 pi),
+ * with tan(theta_i/2) = n.(e_i x e_j) / D0, D0 = s_i s_j + e_i.e_j >= 0, and
+ *   tan((omega_i - theta_i)/2) = -a n.(e_i x e_j) P / (D D0 + (n.(e_i x e_j))^2),
+ *   P = (D - D0)/a = a (s_i^2 + s_j^2 + a^2) / (r_i r_j + s_i s_j) + r_i + r_j + a > 0,
+ * (tan(x - y) = (tan x - tan y) / (1 + tan x tan y), both half-angles of one sign,
+ * |omega_i| < |theta_i|): every term carries the factor a explicitly and is computed
+ * to a few ulps from a (plane_height) and the in-plane geometry, so the cancellation
+ * left is that of the planar picture (~ distance of F / depth of the polygon), not
+ * 1/a.  The form whose terms have the smaller magnitude sum is returned (that sum
+ * times a few eps bounds its rounding error).  *winding = k (-1 for the far fan),
+ * *dmin = in-plane distance from F to the polygon's boundary, *extent its size. */
 static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n, int e,
-                          const double nrm[3], double height)
+                          const double nrm[3], double height, int *winding, double *dmin, double *extent_out)
 {
     double extent = 0.0, total = 0.0;
     for (int i = 1; i < n; ++i) {
@@ -84,6 +167,9 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         scaled_sub3(verts + 3 * i, verts, e, d);
         extent = fmax(extent, sqrt(dot3(d, d)));
     }
+    *extent_out = extent;
+    *winding = -1;
+    *dmin = 0.0;
     if (fabs(height) >= 2.0 * extent) {
         for (int i = 1; i + 1 < n; ++i) {
             double e1[3], e2[3], c[3];
@@ -98,21 +184,43 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         return fabs(total);
     }
     const double a = fabs(height);
+    double abs_total = 0.0, theta = 0.0, delta = 0.0, abs_delta = 0.0, near = HUGE_VAL;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
-        double ei[3], ej[3], edge[3], c[3];
+        double ei[3], ej[3], edge[3], c[3], d[3];
         const double hi = dot3(nrm, rel[i]), hj = dot3(nrm, rel[j]);
         for (int k = 0; k < 3; ++k) {
             ei[k] = rel[i][k] - hi * nrm[k];
             ej[k] = rel[j][k] - hj * nrm[k];
+            d[k] = ej[k] - ei[k];
         }
         scaled_sub3(verts + 3 * j, verts + 3 * i, e, edge); /* e_i x e_j = e_i x (v_j - v_i) */
         cross3(ei, edge, c);
         const double num = dot3(nrm, c), dot = dot3(ei, ej), ri = dist[i], rj = dist[j];
+        const double si = norm3(ei), sj = norm3(ej);
         const double pair = dot >= 0.0 ? ri * rj + dot
-                                       : (a * a * (a * a + dot3(ei, ei) + dot3(ej, ej)) + num * num) / (ri * rj - dot);
-        total += 2.0 * atan2(num, pair + a * (ri + rj) + a * a);
+                                       : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
+        const double den = pair + a * (ri + rj) + a * a;
+        const double term = 2.0 * atan2(num, den);
+        total += term;
+        abs_total += fabs(term);
+        const double den0 = dot >= 0.0 ? si * sj + dot : num * num / (si * sj - dot);
+        theta += 2.0 * atan2(num, den0);
+        const double p = a * (si * si + sj * sj + a * a) / (ri * rj + si * sj) + ri + rj + a;
+        const double dterm = 2.0 * atan2(-a * num * p, den * den0 + num * num);
+        delta += dterm;
+        abs_delta += fabs(dterm);
+        /* distance from F to the edge's segment, in the plane */
+        const double dd2 = dot3(d, d);
+        const double t = dd2 > 0.0 ? fmin(1.0, fmax(0.0, -dot3(ei, d) / dd2)) : 0.0;
+        double q[3];
+        for (int k = 0; k < 3; ++k) q[k] = ei[k] + t * d[k];
+        near = fmin(near, norm3(q));
     }
+    const double k = nearbyint(theta / (2.0 * M_PI));
+    *winding = (int)fabs(k);
+    *dmin = near;
+    if (2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
     return fabs(total);
 }
 
@@ -146,9 +254,11 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         if (!(g->dist[i] > 0.0)) return; /* within 2^-1074 of the farthest vertex: on it, in the plane */
     }
     double nrm[3], rmax = 0.0;
-    if (!newell_normal(kept, m, nrm)) return; /* zero-area polygon: sees nothing */
+    dd big[3];
+    int ev;
+    if (!newell_normal(kept, m, nrm, big, &ev)) return; /* zero-area polygon: sees nothing */
     for (int i = 0; i < m; ++i) rmax = fmax(rmax, g->dist[i]);
-    const double height = dot3(nrm, g->rel[0]); /* signed: > 0 when the polygon lies along +nrm */
+    const double height = plane_height(kept, x, big, ex); /* signed: > 0 when the polygon lies along +nrm */
     /* Below a few ulps of the distances the side of the plane is decided by rounding. */
     if (fabs(height) <= 8.0 * DBL_EPSILON * rmax) return;
     /* Seen from x, the polygon is counter-clockwise from outside the unit sphere
@@ -165,7 +275,10 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             g->dist[i] = norm3(g->rel[i]);
         }
     }
-    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, -ex, nrm, height);
+    int winding;
+    double dmin, extent;
+    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, -ex, nrm, height, &winding,
+                                     &dmin, &extent);
     g->n = m;
     g->solid_angle = omega;
     shl__pow2_split(-ex, g->grad_scale); /* d/dx = 2^-ex d/dx_scaled */
