@@ -213,32 +213,48 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     return fabs(total);
 }
 
-/* In-plane distance from the foot F of x to the union of the triangles (v_0, v_i,
- * v_{i+1}) of the vertex fan, 0 when F is inside one of them. */
-static double fan_distance(const double (*rel)[3], int n, const double nrm[3])
+/* In-plane offsets from the foot F of x of the vertices (e[i] = rel_i minus its
+ * normal component). */
+static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], double (*e)[3])
 {
-    double e[SHL_MAX_VERTS][3];
     for (int i = 0; i < n; ++i) {
         const double h = dot3(nrm, rel[i]);
         for (int k = 0; k < 3; ++k) e[i][k] = rel[i][k] - h * nrm[k];
     }
-    double best = HUGE_VAL;
+}
+
+/* In-plane distance from F (the origin of the offsets) to the triangle (p0, p1, p2),
+ * 0 when F is inside or on it; *diam = its longest side. */
+static double triangle_distance(const double *const p[3], const double nrm[3], double *diam)
+{
+    double best = HUGE_VAL, longest = 0.0;
+    int pos = 0, neg = 0;
+    for (int s = 0; s < 3; ++s) {
+        const double *a = p[s], *b = p[(s + 1) % 3];
+        double c[3], d[3], f[3];
+        cross3(a, b, c);
+        const double side = dot3(nrm, c);
+        pos += side > 0.0, neg += side < 0.0;
+        for (int k = 0; k < 3; ++k) d[k] = b[k] - a[k];
+        const double dd2 = dot3(d, d);
+        const double u = dd2 > 0.0 ? fmin(1.0, fmax(0.0, -dot3(a, d) / dd2)) : 0.0;
+        for (int k = 0; k < 3; ++k) f[k] = a[k] + u * d[k];
+        best = fmin(best, norm3(f));
+        longest = fmax(longest, sqrt(dd2));
+    }
+    *diam = longest;
+    return pos == 0 || neg == 0 ? 0.0 : best;
+}
+
+/* In-plane distance from F to the union of the triangles (v_0, v_i, v_{i+1}) of the
+ * vertex fan, 0 when F is inside one of them. */
+static double fan_distance(const double (*rel)[3], int n, const double nrm[3])
+{
+    double e[SHL_MAX_VERTS][3], best = HUGE_VAL, diam;
+    plane_offsets(rel, n, nrm, e);
     for (int t = 1; t + 1 < n; ++t) {
-        const int idx[3] = {0, t, t + 1};
-        int pos = 0, neg = 0;
-        for (int s = 0; s < 3; ++s) {
-            const double *p = e[idx[s]], *q = e[idx[(s + 1) % 3]];
-            double c[3], d[3], f[3];
-            cross3(p, q, c);
-            const double side = dot3(nrm, c);
-            pos += side > 0.0, neg += side < 0.0;
-            for (int k = 0; k < 3; ++k) d[k] = q[k] - p[k];
-            const double dd2 = dot3(d, d);
-            const double u = dd2 > 0.0 ? fmin(1.0, fmax(0.0, -dot3(p, d) / dd2)) : 0.0;
-            for (int k = 0; k < 3; ++k) f[k] = p[k] + u * d[k];
-            best = fmin(best, norm3(f));
-        }
-        if (pos == 0 || neg == 0) return 0.0; /* F inside or on the triangle */
+        const double *const tri[3] = {e[0], e[t], e[t + 1]};
+        best = fmin(best, triangle_distance(tri, nrm, &diam));
     }
     return best;
 }
@@ -303,7 +319,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     memcpy(g->nrm, nrm, sizeof g->nrm);
     g->height = fabs(height);
     const double dmin = fan_distance((const double(*)[3])g->rel, m, nrm);
-    g->sliver = g->height <= 0.25 * dmin && 2.0 * dmin >= extent;
+    g->sliver = 64.0 * g->height <= dmin && 2.0 * dmin >= extent;
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
@@ -352,35 +368,43 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
 
 /* Near-plane sliver regime (g->sliver: the foot F of x lies outside the triangles
  * of the vertex fan, at in-plane distance dmin >= extent / 2 from them, and
- * |h| <= dmin / 4).  The boundary recurrence sums O(1) edge terms to O(|h|) there
- * (relative error ~ eps / |h|), so the ZH integrals are taken over the plane instead:
+ * |h| <= dmin / 64).  The boundary recurrence sums O(1) edge terms to O(|h|) there
+ * (relative error ~ eps dmin / |h|: ~1e-13 at the switch), so the ZH integrals are
+ * taken over the plane instead:
  *   int_Q P_l(d . w) dw = int_polygon P_l(d . p / |p|) |h| / |p|^3 dA,   p = point - x,
  * with the explicit factor |h| (accurate, plane_height) and integrand values
  * accurate to a few ulps, on the signed fan of triangles with the collapsed
- * NAREA x NAREA Gauss-Legendre product p = A + u (B - A) + u v (C - B),
- * dA = 2 |T| u du dv (as irradiance.c's area_rule).  Error bound: along any segment
- * of the rule (length L <= extent <= 2 dmin) the integrand's singularities are the
- * complex points where |p|^2 = 0, i.e. at imaginary offset sqrt(p_perp^2 + h^2) >=
- * dmin from the real point nearest F, so outside the Bernstein ellipse
- * rho = 1 + sqrt 2 of the segment; Gauss-Legendre then errs by <= 64 M / (15 (rho^2 - 1)
- * rho^(2 NAREA)) (Trefethen 2013, Thm. 19.3), rho^-48 = 4e-19 for NAREA = 24: the
- * result's error is rounding, measured <= 1e-14 of the solid angle up to lmax 16
- * (tests/test_polygon_nearplane.c).  S_0 is the exact solid angle.  Cost: (n - 2) NAREA^2
- * nodes x (2 lmax + 1) lobes x lmax bands, ~25x the recurrence for a quad at lmax 8. */
-enum { NAREA = 24 };
+ * N x N Gauss-Legendre product p = A + u (B - A) + u v (C - B), dA = 2 |T| u du dv
+ * (as irradiance.c's area_rule).  Error bound: every line of the rule is a segment
+ * of length <= L (the triangle's longest side) at in-plane distance >= d_T from F;
+ * the integrand's singularities are the complex points where |p|^2 = 0, at
+ * imaginary offset sqrt(p_perp^2 + h^2) >= d_T from the real point nearest F, so
+ * outside the Bernstein ellipse rho = s + sqrt(s^2 + 1), s = 2 d_T / L >= 1, of the
+ * segment; Gauss-Legendre then errs by <= 64 M / (15 (rho^2 - 1) rho^(2N)) (Trefethen,
+ * ATAP Thm. 19.3), where M = max |integrand| on the ellipse grows with l like the
+ * Legendre polynomials off [-1, 1].  N is the least with rho^(2N) >= 1e16 10^(lmax/4)
+ * (capped at 24: rho^48 >= 2e18 for rho >= 1 + sqrt 2; the l-term is empirical:
+ * 1e16 alone leaves 3e-12 at lmax 14): the result's error is then
+ * rounding, measured <= 3e-14 of the solid angle up to lmax 14
+ * (tests/test_polygon_nearplane.c).  S_0 is the exact solid angle.
+ * Cost: (n - 2) N^2 nodes x (2 lmax + 1) lobes x lmax bands (README table). */
+enum { NAREA_MAX = 24 };
 
 void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
 {
+    enum { ND = 2 * SHL__AREA_LMAX + 1 };
     const int ndir = 2 * lmax + 1;
-    double gx[NAREA], gw[NAREA], acc[2 * SHL_LMAX_MAX + 1][SHL_LMAX_MAX + 1], rec_a[SHL_LMAX_MAX + 1],
-        rec_b[SHL_LMAX_MAX + 1];
-    shl__gauss_legendre(NAREA, gx, gw);
+    double acc[SHL__AREA_LMAX + 1][ND], lx[ND], ly[ND], lz[ND], rec_a[SHL__AREA_LMAX + 1], rec_b[SHL__AREA_LMAX + 1];
+    double e[SHL_MAX_VERTS][3];
     for (int l = 2; l <= lmax; ++l) {
-        rec_a[l] = (2.0 * l - 1.0) / l; /* P_l = ((2l-1) t P_{l-1} - (l-1) P_{l-2}) / l */
+        rec_a[l] = (2.0 * l - 1.0) / l; /* P_l = ((2l-1) z P_{l-1} - (l-1) P_{l-2}) / l */
         rec_b[l] = (l - 1.0) / l;
     }
-    for (int d = 0; d < ndir; ++d)
-        for (int l = 0; l <= lmax; ++l) acc[d][l] = 0.0;
+    for (int d = 0; d < ndir; ++d) {
+        lx[d] = shl__zh_dir[d][0], ly[d] = shl__zh_dir[d][1], lz[d] = shl__zh_dir[d][2];
+        for (int l = 0; l <= lmax; ++l) acc[l][d] = 0.0;
+    }
+    plane_offsets((const double(*)[3])g->rel, g->n, g->nrm, e);
     double sgn_area = 0.0;
     for (int t = 1; t + 1 < g->n; ++t) {
         double ab[3], bc[3], c[3];
@@ -393,41 +417,43 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
     const double orient = sgn_area < 0.0 ? -1.0 : 1.0; /* signed fan: concave polygons too */
     for (int t = 1; t + 1 < g->n; ++t) {
-        double ab[3], bc[3], c[3];
+        double ab[3], bc[3], c[3], diam, gx[NAREA_MAX], gw[NAREA_MAX];
+        const double *const tri[3] = {e[0], e[t], e[t + 1]};
+        const double s = 2.0 * triangle_distance(tri, g->nrm, &diam) / diam, rho = s + sqrt(s * s + 1.0);
+        const int nq = imax(2, (int)fmin(NAREA_MAX, ceil((8.0 + 0.125 * lmax) * log(10.0) / log(rho))));
+        shl__gauss_legendre(nq, gx, gw);
         for (int k = 0; k < 3; ++k) {
             ab[k] = g->rel[t][k] - g->rel[0][k];
             bc[k] = g->rel[t + 1][k] - g->rel[t][k];
         }
         cross3(ab, bc, c);
         const double scale = 0.25 * orient * dot3(g->nrm, c) * g->height; /* du dv = dgx dgy / 4, |h| */
-        for (int i = 0; i < NAREA; ++i) {
+        for (int i = 0; i < nq; ++i) {
             const double u = 0.5 * (gx[i] + 1.0);
-            for (int j = 0; j < NAREA; ++j) {
+            for (int j = 0; j < nq; ++j) {
                 const double v = 0.5 * (gx[j] + 1.0);
-                double q[3];
+                double q[3], z[ND], p0[ND], p1[ND];
                 for (int k = 0; k < 3; ++k) q[k] = g->rel[0][k] + u * ab[k] + u * v * bc[k];
-                const double r = norm3(q), inv = 1.0 / r;
+                const double inv = 1.0 / norm3(q);
                 const double wt = scale * gw[i] * gw[j] * u * inv * inv * inv;
                 for (int k = 0; k < 3; ++k) q[k] *= inv;
                 for (int d = 0; d < ndir; ++d) {
-                    const double *lobe = shl__zh_dir[d];
-                    const double z = lobe[0] * q[0] + lobe[1] * q[1] + lobe[2] * q[2];
-                    double p0 = 1.0, p1 = z;
-                    double *out = acc[d];
-                    out[0] += wt;
-                    if (lmax >= 1) out[1] += wt * z;
-                    for (int l = 2; l <= lmax; ++l) {
-                        const double p2 = rec_a[l] * z * p1 - rec_b[l] * p0;
-                        out[l] += wt * p2;
-                        p0 = p1, p1 = p2;
-                    }
+                    z[d] = lx[d] * q[0] + ly[d] * q[1] + lz[d] * q[2];
+                    p0[d] = 1.0, p1[d] = z[d];
+                    acc[1][d] += wt * z[d];
                 }
+                for (int l = 2; l <= lmax; ++l)
+                    for (int d = 0; d < ndir; ++d) {
+                        const double p2 = rec_a[l] * z[d] * p1[d] - rec_b[l] * p0[d];
+                        p0[d] = p1[d], p1[d] = p2;
+                        acc[l][d] += wt * p2;
+                    }
             }
         }
     }
     for (int d = 0; d < ndir; ++d) {
         zh[d * SHL__ZH_STRIDE] = sqrt(1.0 / (4.0 * M_PI)) * g->solid_angle;
-        for (int l = 1; l <= lmax; ++l) zh[d * SHL__ZH_STRIDE + l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)) * acc[d][l];
+        for (int l = 1; l <= lmax; ++l) zh[d * SHL__ZH_STRIDE + l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)) * acc[l][d];
     }
 }
 
