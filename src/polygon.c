@@ -387,20 +387,14 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
  * 1e16 alone leaves 3e-12 at lmax 14): the result's error is then
  * rounding, measured <= 3e-14 of the solid angle up to lmax 14
  * (tests/test_polygon_nearplane.c).  S_0 is the exact solid angle.
- * Cost: (n - 2) N^2 nodes x (2 lmax + 1) lobes x lmax bands (README table).
- * With zh_grad (scaled units, layout of shl__poly_zh_grad_d), the x-derivatives of
- * the same integrals, differentiated under the integral sign (the polygon does not
- * move), by the same rule. */
+ * Cost: (n - 2) N^2 nodes x (2 lmax + 1) lobes x lmax bands (README table). */
 enum { NAREA_MAX = 24 };
 
-void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
+void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
 {
-    enum { ND = 2 * SHL__AREA_LMAX + 1, NL = SHL__AREA_LMAX + 1 };
+    enum { ND = 2 * SHL__AREA_LMAX + 1 };
     const int ndir = 2 * lmax + 1;
-    /* acc: coefficient sums; with the gradient, per (l, lobe d) the sums of the terms
-     * along d, along the unit node direction (3 components) and along the normal */
-    double acc[NL][ND], gd[NL][ND], gq[3][NL][ND], gn[NL][ND];
-    double lx[ND], ly[ND], lz[ND], rec_a[NL], rec_b[NL];
+    double acc[SHL__AREA_LMAX + 1][ND], lx[ND], ly[ND], lz[ND], rec_a[SHL__AREA_LMAX + 1], rec_b[SHL__AREA_LMAX + 1];
     double e[SHL_MAX_VERTS][3];
     for (int l = 2; l <= lmax; ++l) {
         rec_a[l] = (2.0 * l - 1.0) / l; /* P_l = ((2l-1) z P_{l-1} - (l-1) P_{l-2}) / l */
@@ -408,7 +402,7 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh, double *zh
     }
     for (int d = 0; d < ndir; ++d) {
         lx[d] = shl__zh_dir[d][0], ly[d] = shl__zh_dir[d][1], lz[d] = shl__zh_dir[d][2];
-        for (int l = 0; l <= lmax; ++l) acc[l][d] = gd[l][d] = gn[l][d] = gq[0][l][d] = gq[1][l][d] = gq[2][l][d] = 0.0;
+        for (int l = 0; l <= lmax; ++l) acc[l][d] = 0.0;
     }
     plane_offsets((const double(*)[3])g->rel, g->n, g->nrm, e);
     double sgn_area = 0.0;
@@ -422,7 +416,6 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh, double *zh
         sgn_area += dot3(g->nrm, c);
     }
     const double orient = sgn_area < 0.0 ? -1.0 : 1.0; /* signed fan: concave polygons too */
-    const double a = g->height;
     for (int t = 1; t + 1 < g->n; ++t) {
         double ab[3], bc[3], c[3], diam, gx[NAREA_MAX], gw[NAREA_MAX];
         const double *const tri[3] = {e[0], e[t], e[t + 1]};
@@ -434,68 +427,33 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh, double *zh
             bc[k] = g->rel[t + 1][k] - g->rel[t][k];
         }
         cross3(ab, bc, c);
-        const double scale = 0.25 * orient * dot3(g->nrm, c); /* du dv = dgx dgy / 4 */
+        const double scale = 0.25 * orient * dot3(g->nrm, c) * g->height; /* du dv = dgx dgy / 4, |h| */
         for (int i = 0; i < nq; ++i) {
             const double u = 0.5 * (gx[i] + 1.0);
             for (int j = 0; j < nq; ++j) {
                 const double v = 0.5 * (gx[j] + 1.0);
-                double q[3], z[ND], p0[ND], p1[ND], dp0[ND], dp1[ND];
+                double q[3], z[ND], p0[ND], p1[ND];
                 for (int k = 0; k < 3; ++k) q[k] = g->rel[0][k] + u * ab[k] + u * v * bc[k];
-                const double inv = 1.0 / norm3(q), w0 = scale * gw[i] * gw[j] * u * inv * inv * inv;
-                const double wt = w0 * a; /* dw = |h| dA / r^3 */
+                const double inv = 1.0 / norm3(q);
+                const double wt = scale * gw[i] * gw[j] * u * inv * inv * inv;
                 for (int k = 0; k < 3; ++k) q[k] *= inv;
                 for (int d = 0; d < ndir; ++d) {
                     z[d] = lx[d] * q[0] + ly[d] * q[1] + lz[d] * q[2];
                     p0[d] = 1.0, p1[d] = z[d];
                     acc[1][d] += wt * z[d];
                 }
-                if (!zh_grad) {
-                    for (int l = 2; l <= lmax; ++l)
-                        for (int d = 0; d < ndir; ++d) {
-                            const double p2 = rec_a[l] * z[d] * p1[d] - rec_b[l] * p0[d];
-                            p0[d] = p1[d], p1[d] = p2;
-                            acc[l][d] += wt * p2;
-                        }
-                    continue;
-                }
-                /* -d/dx of P_l(t) |n.q| / r^3 (q = p - x, t = d.q/r):
-                 * -[P_l'(t) |h|/r^4 (d - t q/r) + P_l(t) (s n / r^3 - 3 |h| q / r^5)], s = sign(n.q) */
-                const double wq = wt * inv;
-                for (int d = 0; d < ndir; ++d) {
-                    dp0[d] = 0.0, dp1[d] = 1.0;
-                    gd[1][d] += wq;
-                    const double bq = -wq * (z[d] + 3.0 * z[d]);
-                    for (int k = 0; k < 3; ++k) gq[k][1][d] += bq * q[k];
-                    gn[1][d] += w0 * z[d];
-                    gn[0][d] += w0;
-                    for (int k = 0; k < 3; ++k) gq[k][0][d] -= 3.0 * wq * q[k];
-                }
                 for (int l = 2; l <= lmax; ++l)
                     for (int d = 0; d < ndir; ++d) {
                         const double p2 = rec_a[l] * z[d] * p1[d] - rec_b[l] * p0[d];
-                        const double dp2 = dp0[d] + (2.0 * l - 1.0) * p1[d]; /* P_l' = P_{l-2}' + (2l-1) P_{l-1} */
-                        p0[d] = p1[d], p1[d] = p2, dp0[d] = dp1[d], dp1[d] = dp2;
+                        p0[d] = p1[d], p1[d] = p2;
                         acc[l][d] += wt * p2;
-                        gd[l][d] += wq * dp2;
-                        const double bq = -wq * (dp2 * z[d] + 3.0 * p2);
-                        gq[0][l][d] += bq * q[0], gq[1][l][d] += bq * q[1], gq[2][l][d] += bq * q[2];
-                        gn[l][d] += w0 * p2;
                     }
             }
         }
     }
-    const double sn = dot3(g->nrm, g->rel[0]) < 0.0 ? -1.0 : 1.0;
     for (int d = 0; d < ndir; ++d) {
         zh[d * SHL__ZH_STRIDE] = sqrt(1.0 / (4.0 * M_PI)) * g->solid_angle;
         for (int l = 1; l <= lmax; ++l) zh[d * SHL__ZH_STRIDE + l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)) * acc[l][d];
-        if (!zh_grad) continue;
-        const double dir[3] = {lx[d], ly[d], lz[d]};
-        for (int l = 0; l <= lmax; ++l) {
-            const double kl = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
-            for (int k = 0; k < 3; ++k)
-                zh_grad[k * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l] =
-                    -kl * (gd[l][d] * dir[k] + gq[k][l][d] + sn * gn[l][d] * g->nrm[k]);
-        }
     }
 }
 

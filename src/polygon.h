@@ -44,10 +44,9 @@ void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
 
-/* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3, and with
- * zh_grad != NULL their gradient (polygon.c); used by the four instances above when
- * g->sliver and lmax <= SHL__AREA_LMAX. */
-void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+/* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3 (polygon.c);
+ * used by the four instances above when g->sliver and lmax <= SHL__AREA_LMAX. */
+void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
 #define SHL__AREA_LMAX 16
 
 /* Sparse ZH -> SH reconstruction (Wang 2018 Eq. 33) from the lobe table (zh_lobes.c);

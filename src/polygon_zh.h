@@ -36,7 +36,7 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #if !WITH_GRAD
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* near-plane sliver: planar Gauss rule (polygon.c) */
         double area[SHL__ZH_BLOCK];
-        shl__poly_zh_area(g, lmax, area, NULL);
+        shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
             for (int l = 0; l <= lmax; ++l) zh[dir * SHL__ZH_STRIDE + l] = (REAL)area[dir * SHL__ZH_STRIDE + l];
         return;
@@ -136,15 +136,11 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
         }
     }
 #if WITH_GRAD
-    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* near-plane sliver: planar Gauss rule (polygon.c) */
-        double area[SHL__ZH_BLOCK], area_grad[3 * SHL__ZH_BLOCK];
-        shl__poly_zh_area(g, lmax, area, area_grad);
+    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as the non-gradient instance */
+        double area[SHL__ZH_BLOCK];
+        shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
-            for (int l = 0; l <= lmax; ++l) {
-                const int at = dir * SHL__ZH_STRIDE + l;
-                zh[at] = (REAL)area[at];
-                for (int k = 0; k < 3; ++k) zh_grad[k * SHL__ZH_BLOCK + at] = (REAL)area_grad[k * SHL__ZH_BLOCK + at];
-            }
+            for (int l = 0; l <= lmax; ++l) zh[dir * SHL__ZH_STRIDE + l] = (REAL)area[dir * SHL__ZH_STRIDE + l];
     }
 #endif
 }
