@@ -319,7 +319,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     memcpy(g->nrm, nrm, sizeof g->nrm);
     g->height = fabs(height);
     const double dmin = fan_distance((const double(*)[3])g->rel, m, nrm);
-    g->sliver = 64.0 * g->height <= dmin && 2.0 * dmin >= extent;
+    g->sliver = 64.0 * g->height <= dmin && 64.0 * dmin >= extent;
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
@@ -367,9 +367,9 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
 }
 
 /* Near-plane sliver regime (g->sliver: the foot F of x lies outside the triangles
- * of the vertex fan, at in-plane distance dmin >= extent / 2 from them, and
+ * of the vertex fan, at in-plane distance dmin >= extent / 64 from them, and
  * |h| <= dmin / 64).  The boundary recurrence sums O(1) edge terms to O(|h|) there
- * (relative error ~ eps dmin / |h|: ~1e-13 at the switch), so the ZH integrals are
+ * (relative error ~ eps dmin / |h|: <= 1e-13 at the switch), so the ZH integrals are
  * taken over the plane instead:
  *   int_Q P_l(d . w) dw = int_polygon P_l(d . p / |p|) |h| / |p|^3 dA,   p = point - x,
  * with the explicit factor |h| (accurate, plane_height) and integrand values
@@ -379,16 +379,24 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
  * of length <= L (the triangle's longest side) at in-plane distance >= d_T from F;
  * the integrand's singularities are the complex points where |p|^2 = 0, at
  * imaginary offset sqrt(p_perp^2 + h^2) >= d_T from the real point nearest F, so
- * outside the Bernstein ellipse rho = s + sqrt(s^2 + 1), s = 2 d_T / L >= 1, of the
+ * outside the Bernstein ellipse rho = s + sqrt(s^2 + 1), s = 2 d_T / L, of the
  * segment; Gauss-Legendre then errs by <= 64 M / (15 (rho^2 - 1) rho^(2N)) (Trefethen,
  * ATAP Thm. 19.3), where M = max |integrand| on the ellipse grows with l like the
- * Legendre polynomials off [-1, 1].  N is the least with rho^(2N) >= 1e16 10^(lmax/4)
- * (capped at 24: rho^48 >= 2e18 for rho >= 1 + sqrt 2; the l-term is empirical:
- * 1e16 alone leaves 3e-12 at lmax 14): the result's error is then
- * rounding, measured <= 3e-14 of the solid angle up to lmax 14
- * (tests/test_polygon_nearplane.c).  S_0 is the exact solid angle.
- * Cost: (n - 2) N^2 nodes x (2 lmax + 1) lobes x lmax bands (README table). */
-enum { NAREA_MAX = 24 };
+ * Legendre polynomials off [-1, 1].  A triangle with s < 1 is split at its side
+ * midpoints (L halves, d_T does not shrink) up to AREA_DEPTH times, which reaches
+ * s >= 2^(AREA_DEPTH+1) dmin / extent >= 1 in the regime; then N is the least with
+ * rho^(2N) >= 1e16 10^(lmax/4) (capped at 24: rho^48 >= 2e18 for rho >= 1 + sqrt 2; the
+ * l-term is empirical: 1e16 alone leaves 3e-12 at lmax 14).  The result's error is
+ * then rounding, measured <= 1e-13 of the solid angle up to lmax 14, also 0.1
+ * half-sides from an edge (tests/test_polygon_nearplane.c).  S_0 is the exact solid
+ * angle.  Cost: (number of triangles) N^2 nodes x (2 lmax + 1) lobes x lmax bands,
+ * ~40x the recurrence for a quad at dmin ~ extent (README table). */
+enum { NAREA_MAX = 24, AREA_DEPTH = 5 };
+
+typedef struct {
+    double p[3][3], e[3][3]; /* corners: rel (scaled v - x) and in-plane offset from F */
+    int depth;
+} area_tri;
 
 void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
 {
@@ -417,37 +425,73 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
     const double orient = sgn_area < 0.0 ? -1.0 : 1.0; /* signed fan: concave polygons too */
     for (int t = 1; t + 1 < g->n; ++t) {
-        double ab[3], bc[3], c[3], diam, gx[NAREA_MAX], gw[NAREA_MAX];
-        const double *const tri[3] = {e[0], e[t], e[t + 1]};
-        const double s = 2.0 * triangle_distance(tri, g->nrm, &diam) / diam, rho = s + sqrt(s * s + 1.0);
-        const int nq = imax(2, (int)fmin(NAREA_MAX, ceil((8.0 + 0.125 * lmax) * log(10.0) / log(rho))));
-        shl__gauss_legendre(nq, gx, gw);
+        /* depth-first midpoint subdivision: corners (rel, in-plane offset) and depth */
+        area_tri stack[3 * AREA_DEPTH + 1];
+        int top = 0;
         for (int k = 0; k < 3; ++k) {
-            ab[k] = g->rel[t][k] - g->rel[0][k];
-            bc[k] = g->rel[t + 1][k] - g->rel[t][k];
+            const int vi = k == 0 ? 0 : t + k - 1;
+            memcpy(stack[0].p[k], g->rel[vi], sizeof stack[0].p[k]);
+            memcpy(stack[0].e[k], e[vi], sizeof stack[0].e[k]);
         }
-        cross3(ab, bc, c);
-        const double scale = 0.25 * orient * dot3(g->nrm, c) * g->height; /* du dv = dgx dgy / 4, |h| */
-        for (int i = 0; i < nq; ++i) {
-            const double u = 0.5 * (gx[i] + 1.0);
-            for (int j = 0; j < nq; ++j) {
-                const double v = 0.5 * (gx[j] + 1.0);
-                double q[3], z[ND], p0[ND], p1[ND];
-                for (int k = 0; k < 3; ++k) q[k] = g->rel[0][k] + u * ab[k] + u * v * bc[k];
-                const double inv = 1.0 / norm3(q);
-                const double wt = scale * gw[i] * gw[j] * u * inv * inv * inv;
-                for (int k = 0; k < 3; ++k) q[k] *= inv;
-                for (int d = 0; d < ndir; ++d) {
-                    z[d] = lx[d] * q[0] + ly[d] * q[1] + lz[d] * q[2];
-                    p0[d] = 1.0, p1[d] = z[d];
-                    acc[1][d] += wt * z[d];
-                }
-                for (int l = 2; l <= lmax; ++l)
-                    for (int d = 0; d < ndir; ++d) {
-                        const double p2 = rec_a[l] * z[d] * p1[d] - rec_b[l] * p0[d];
-                        p0[d] = p1[d], p1[d] = p2;
-                        acc[l][d] += wt * p2;
+        stack[0].depth = 0;
+        while (top >= 0) {
+            const area_tri tr = stack[top--];
+            double diam, gx[NAREA_MAX], gw[NAREA_MAX];
+            const double *const te[3] = {tr.e[0], tr.e[1], tr.e[2]};
+            const double s = 2.0 * triangle_distance(te, g->nrm, &diam) / diam;
+            if (s < 1.0 && tr.depth < AREA_DEPTH) { /* split into 4, orientation kept */
+                area_tri mid;
+                for (int k = 0; k < 3; ++k)
+                    for (int c = 0; c < 3; ++c) {
+                        mid.p[k][c] = 0.5 * (tr.p[k][c] + tr.p[(k + 1) % 3][c]);
+                        mid.e[k][c] = 0.5 * (tr.e[k][c] + tr.e[(k + 1) % 3][c]);
                     }
+                mid.depth = tr.depth + 1;
+                for (int k = 0; k < 3; ++k) { /* corner k with the midpoints of its two sides */
+                    area_tri *child = &stack[++top];
+                    const int prev = (k + 2) % 3;
+                    memcpy(child->p[0], tr.p[k], sizeof child->p[0]);
+                    memcpy(child->e[0], tr.e[k], sizeof child->e[0]);
+                    memcpy(child->p[1], mid.p[k], sizeof child->p[1]);
+                    memcpy(child->e[1], mid.e[k], sizeof child->e[1]);
+                    memcpy(child->p[2], mid.p[prev], sizeof child->p[2]);
+                    memcpy(child->e[2], mid.e[prev], sizeof child->e[2]);
+                    child->depth = mid.depth;
+                }
+                stack[++top] = mid;
+                continue;
+            }
+            const double rho = s + sqrt(s * s + 1.0);
+            const int nq = imax(2, (int)fmin(NAREA_MAX, ceil((8.0 + 0.125 * lmax) * log(10.0) / log(rho))));
+            shl__gauss_legendre(nq, gx, gw);
+            double ab[3], bc[3], c[3];
+            for (int k = 0; k < 3; ++k) {
+                ab[k] = tr.p[1][k] - tr.p[0][k];
+                bc[k] = tr.p[2][k] - tr.p[1][k];
+            }
+            cross3(ab, bc, c);
+            const double scale = 0.25 * orient * dot3(g->nrm, c) * g->height; /* du dv = dgx dgy / 4, |h| */
+            for (int i = 0; i < nq; ++i) {
+                const double u = 0.5 * (gx[i] + 1.0);
+                for (int j = 0; j < nq; ++j) {
+                    const double v = 0.5 * (gx[j] + 1.0);
+                    double q[3], z[ND], p0[ND], p1[ND];
+                    for (int k = 0; k < 3; ++k) q[k] = tr.p[0][k] + u * ab[k] + u * v * bc[k];
+                    const double inv = 1.0 / norm3(q);
+                    const double wt = scale * gw[i] * gw[j] * u * inv * inv * inv;
+                    for (int k = 0; k < 3; ++k) q[k] *= inv;
+                    for (int d = 0; d < ndir; ++d) {
+                        z[d] = lx[d] * q[0] + ly[d] * q[1] + lz[d] * q[2];
+                        p0[d] = 1.0, p1[d] = z[d];
+                        acc[1][d] += wt * z[d];
+                    }
+                    for (int l = 2; l <= lmax; ++l)
+                        for (int d = 0; d < ndir; ++d) {
+                            const double p2 = rec_a[l] * z[d] * p1[d] - rec_b[l] * p0[d];
+                            p0[d] = p1[d], p1[d] = p2;
+                            acc[l][d] += wt * p2;
+                        }
+                }
             }
         }
     }

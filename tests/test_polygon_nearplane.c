@@ -4,11 +4,10 @@
  *  - solid angle: Van Oosterom-Strackee over the fan from vertex 0 of a convex
  *    polygon seen from outside its footprint.  Every triangle then has the same
  *    sign (no cancellation between terms); the triple product R0 . (Ri x Rj) = O(h)
- *    is formed in double-double from the exact differences v - x (TwoSum), so it is
- *    accurate to ~27 |R|^3 eps^2 absolute, i.e. relative <= 1e-18 at h = 1e-12; the
- *    denominator is a sum of positive terms (all angles between vertex directions
- *    below 90 degrees, checked) and atan is accurate to an ulp: relative error of
- *    the reference <= ~8 eps = 1.8e-15.
+ *    and the denominator are formed in double-double from the exact differences
+ *    v - x (TwoSum), so they are accurate to ~30 |R|^3 eps^2 absolute, i.e. relative
+ *    <= 1e-18 at h = 1e-12 (the denominator is O(|R|^3) here), and atan is accurate
+ *    to an ulp: relative error of the reference <= ~3 eps = 7e-16.
  *  - coefficients: tensor Gauss-Legendre on the square in its own plane coordinates,
  *    dw = h dA / r^3, Y_lm from ref_sh_eval_grad (tests/ref_quad.c), h from a
  *    double-double plane distance.  The foot of x is >= 2 (axis case) / 1.5 (tilted)
@@ -16,6 +15,8 @@
  *    integrand is analytic in each panel's Bernstein ellipse rho >= 4 + sqrt(15)
  *    per direction: 24 nodes per panel leave a rule error ~ rho^-48 ~ 1e-43, i.e.
  *    rounding only (~ 1e-15 of the solid angle for 9216 positive-weight terms).
+ *    Near an edge the panels shrink to <= 1.25 x the foot's distance: rho >= 5,
+ *    rho^-48 ~ 1e-33.
  * Inputs: square (+-1, +-1, 0) with x = (3, 0.5, h) (all v - x exact), and a tilted
  * square exactly planar in doubles: plane normal (1,2,2)/3, edges along the integer
  * vectors U = (2,1,-2), W = (2,-2,1) (mutually orthogonal with the normal), vertices
@@ -55,17 +56,28 @@ static tdd t_mul(tdd x, tdd y)
 }
 static tdd t_sub(tdd x, tdd y) { return t_add(x, (tdd){-y.hi, -y.lo}); }
 
-/* Reference solid angle of a convex polygon (vertex fan, all terms one sign). */
+/* sqrt of a double-double to ~eps^2 (one Newton step from the double sqrt) */
+static tdd t_sqrt(tdd x)
+{
+    const double r = sqrt(x.hi);
+    const tdd rr = t_mul((tdd){r, 0.0}, (tdd){r, 0.0});
+    const tdd res = t_sub(x, rr);
+    const double lo = (res.hi + res.lo) / (2.0 * r), hi = r + lo;
+    return (tdd){hi, lo - (hi - r)};
+}
+static tdd t_dot(const tdd *a, const tdd *b)
+{
+    return t_add(t_add(t_mul(a[0], b[0]), t_mul(a[1], b[1])), t_mul(a[2], b[2]));
+}
+
+/* Reference solid angle of a convex polygon (vertex fan, all terms one sign; the
+ * triple product and denominator in double-double, so neither cancels). */
 static double ref_vos_dd(const double x[3], const double *v, int n)
 {
-    tdd r[8][3];
-    double rh[8][3], len[8];
+    tdd r[8][3], len[8];
     for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) {
-            r[i][k] = t_two_sum(v[3 * i + k], -x[k]);
-            rh[i][k] = r[i][k].hi + r[i][k].lo;
-        }
-        len[i] = sqrt(rh[i][0] * rh[i][0] + rh[i][1] * rh[i][1] + rh[i][2] * rh[i][2]);
+        for (int k = 0; k < 3; ++k) r[i][k] = t_two_sum(v[3 * i + k], -x[k]);
+        len[i] = t_sqrt(t_dot(r[i], r[i]));
     }
     double total = 0.0;
     for (int i = 1; i + 1 < n; ++i) {
@@ -76,32 +88,34 @@ static double ref_vos_dd(const double x[3], const double *v, int n)
             const tdd c = t_sub(t_mul(r[i][k1], r[j][k2]), t_mul(r[i][k2], r[j][k1]));
             trip = t_add(trip, t_mul(r[0][k], c));
         }
-        const double d01 = rh[0][0] * rh[i][0] + rh[0][1] * rh[i][1] + rh[0][2] * rh[i][2];
-        const double d02 = rh[0][0] * rh[j][0] + rh[0][1] * rh[j][1] + rh[0][2] * rh[j][2];
-        const double d12 = rh[i][0] * rh[j][0] + rh[i][1] * rh[j][1] + rh[i][2] * rh[j][2];
-        CHECK(d01 > 0.0 && d02 > 0.0 && d12 > 0.0);
-        const double den = len[0] * len[i] * len[j] + d01 * len[j] + d02 * len[i] + d12 * len[0];
-        total += 2.0 * atan(trip.hi / den);
+        tdd den = t_mul(t_mul(len[0], len[i]), len[j]);
+        den = t_add(den, t_mul(t_dot(r[0], r[i]), len[j]));
+        den = t_add(den, t_mul(t_dot(r[0], r[j]), len[i]));
+        den = t_add(den, t_mul(t_dot(r[i], r[j]), len[0]));
+        CHECK(den.hi > 0.0); /* a triangle seen under less than pi */
+        total += 2.0 * atan(trip.hi / den.hi);
     }
     return fabs(total);
 }
 
 /* The two test geometries: square centre c, unit plane axes eu, ew, unit normal nn,
- * half-side s (in plane units), and the point at in-plane offset (3s, s/2) and height h. */
+ * half-side s (in plane units), and the point at in-plane offset (k0 s, s/2) and height h. */
 typedef struct {
     double c[3], eu[3], ew[3], nn[3], half;
     double verts[12], x[3];
     double a; /* exact height of x (double-double, rounded) */
+    double k0;
 } np_case;
 
-static void make_case(int tilted, double h, np_case *t)
+static void make_case(int tilted, double h, double k0, np_case *t)
 {
     memset(t, 0, sizeof *t);
+    t->k0 = k0;
     if (!tilted) {
         t->eu[0] = 1.0, t->ew[1] = 1.0, t->nn[2] = 1.0, t->half = 1.0;
         const double sq[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
         memcpy(t->verts, sq, sizeof sq);
-        t->x[0] = 3.0, t->x[1] = 0.5, t->x[2] = h;
+        t->x[0] = k0, t->x[1] = 0.5, t->x[2] = h;
         t->a = h;
         return;
     }
@@ -112,7 +126,7 @@ static void make_case(int tilted, double h, np_case *t)
         t->c[k] = c[k];
         t->eu[k] = U[k] / 3.0, t->ew[k] = W[k] / 3.0, t->nn[k] = N[k] / 3.0;
         for (int i = 0; i < 4; ++i) t->verts[3 * i + k] = c[k] + 0.25 * (su[i] * U[k] + sw[i] * W[k]);
-        t->x[k] = c[k] + 0.25 * (3.0 * U[k] + 0.5 * W[k]) + h * N[k] / 3.0;
+        t->x[k] = c[k] + 0.25 * (k0 * U[k] + 0.5 * W[k]) + h * N[k] / 3.0;
     }
     t->half = 0.75;
     tdd s = {0.0, 0.0}; /* N . (x - c) exactly up to the final rounding; N has small integers */
@@ -123,7 +137,7 @@ static void make_case(int tilted, double h, np_case *t)
     t->a = (s.hi + s.lo) / 3.0;
 }
 
-enum { NPAN = 4, NG = 24, NCM = SHL_NCOEFFS(14) };
+enum { NG = 24, NCM = SHL_NCOEFFS(14) };
 
 /* Gauss-Legendre nodes/weights on [-1, 1] (Newton on P_n), independent of the library. */
 static void gl_nodes(int n, double *xs, double *ws)
@@ -152,6 +166,8 @@ static void gl_nodes(int n, double *xs, double *ws)
  * extension, qh = q/r) and grad_q (|n.q| / r^3) = -n / r^3 - 3 h q / r^5 (n.q = -h). */
 static void ref_coeffs(const np_case *t, int lmax, double *out, double *grad)
 {
+    /* panels of width <= 1.25 x the foot's distance from the square (k0 - 1) s: rho >= 2.6 + 2.4 */
+    const int NPAN = (int)fmax(4.0, ceil(1.6 / (t->k0 - 1.0)));
     const int nc = SHL_NCOEFFS(lmax);
     double gx[NG], gw[NG], y[NCM], g[3 * NCM];
     gl_nodes(NG, gx, gw);
@@ -192,7 +208,7 @@ SHL_TEST(nearplane_solid_angle_sweep)
         double worst = 0.0;
         for (int p = 3; p <= 12; ++p) {
             np_case t;
-            make_case(tilted, pow(10.0, -p), &t);
+            make_case(tilted, pow(10.0, -p), 3.0, &t);
             double omega;
             CHECK(shl_polygon_solid_angle(t.x, t.verts, 4, &omega) == SHL_OK);
             const double want = ref_vos_dd(t.x, t.verts, 4), e = fabs(omega - want) / want;
@@ -217,7 +233,7 @@ SHL_TEST(nearplane_coeffs_sweep)
             const double hs[10] = {0.05, 0.03, 0.02, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
             for (int p = 0; p < 10; ++p) {
                 np_case t;
-                make_case(tilted, hs[p], &t);
+                make_case(tilted, hs[p], 3.0, &t);
                 double got[NCM], want[NCM], omega, err = 0.0;
                 CHECK(shl_polygon(ctx, t.x, t.verts, 4, got) == SHL_OK);
                 CHECK(shl_polygon_solid_angle(t.x, t.verts, 4, &omega) == SHL_OK);
@@ -253,7 +269,7 @@ SHL_TEST(nearplane_grad_sweep)
         const double hs[7] = {0.05, 0.02, 1e-3, 1e-5, 1e-7, 1e-8, 1e-9};
         for (int p = 0; p < 7; ++p) {
             np_case t;
-            make_case(tilted, hs[p], &t);
+            make_case(tilted, hs[p], 3.0, &t);
             double got[NCM], want[NCM], ggot[3 * NCM], gwant[3 * NCM], err[2] = {0, 0}, scale[2] = {0, 0};
             CHECK(shl_polygon_grad(ctx, t.x, t.verts, 4, got, ggot) == SHL_OK);
             ref_coeffs(&t, lmax, want, gwant);
@@ -280,4 +296,35 @@ SHL_TEST(nearplane_grad_sweep)
                      tilted ? "tilted" : "axis", lmax, worst[0], worst[1]);
         shl_ctx_destroy(ctx);
     }
+}
+
+/* Foot of x close to an edge (0.2 and 0.1 half-sides outside it): the planar rule
+ * subdivides its triangles (polygon.c); same targets and references. */
+SHL_TEST(nearplane_near_edge)
+{
+    const double k0s[2] = {1.2, 1.1}, hs[2] = {1e-4, 1e-9};
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
+    const int nc = SHL_NCOEFFS(14);
+    double worst = 0.0, worst_sa = 0.0;
+    for (int tilted = 0; tilted < 2; ++tilted)
+        for (int a = 0; a < 2; ++a)
+            for (int p = 0; p < 2; ++p) {
+                np_case t;
+                make_case(tilted, hs[p], k0s[a], &t);
+                double got[NCM], want[NCM], omega, err = 0.0;
+                CHECK(shl_polygon(ctx, t.x, t.verts, 4, got) == SHL_OK);
+                CHECK(shl_polygon_solid_angle(t.x, t.verts, 4, &omega) == SHL_OK);
+                ref_coeffs(&t, 14, want, NULL);
+                for (int k = 0; k < nc; ++k) err = fmax(err, fabs(got[k] - want[k]));
+                err /= omega;
+                worst = fmax(worst, err);
+                const double sa = fabs(omega - ref_vos_dd(t.x, t.verts, 4)) / omega;
+                worst_sa = fmax(worst_sa, sa);
+                if (!(err <= 1e-12 && sa <= 1e-13))
+                    harness_fail(__FILE__, __LINE__, "%s k0 %g h=%g: max error / omega %.3g, solid angle %.3g",
+                                 tilted ? "tilted" : "axis", k0s[a], hs[p], err, sa);
+            }
+    harness_note("lmax 14 max error/omega %.2e (tol 1e-12), solid angle %.2e (tol 1e-13)", worst, worst_sa);
+    shl_ctx_destroy(ctx);
 }
