@@ -76,12 +76,13 @@ int shl_eval_basis_f(int lmax, const float dir[3], float *y);
  * A point in the polygon's plane sees no solid angle: all coefficients are 0.
  * Zero-length edges (repeated vertices) are skipped.
  * Near the plane (distance h from it), with the foot of x outside the polygon at
- * in-plane distance dmin >= 1/64 of the polygon's size from its vertex fan and
+ * in-plane distance dmin >= 1/4 of the polygon's size from its vertex fan and
  * h <= dmin/64, lmax <= 16: the integrals are taken by a Gauss rule on the
  * polygon's plane (dw = h dA / r^3, h as an explicit factor), so the error stays
  * below ~1e-13 of the solid angle however small h is (the boundary recurrence used
- * elsewhere loses ~eps dmin / h there); about 40x the cost of the recurrence for a
- * quad, more when the foot is close to an edge, in that regime only.
+ * elsewhere loses ~eps dmin / h there); 40x (dmin ~ size) to 170x (dmin = size/4)
+ * the cost of the recurrence for a quad at lmax 8, in that regime only.  Closer to
+ * an edge the recurrence stays, with its error ~eps dmin / h of the solid angle.
  */
 int shl_polygon(const shl_ctx *ctx, const double x[3],
                 const double *verts, int n, double *coeffs);

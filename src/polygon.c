@@ -319,7 +319,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     memcpy(g->nrm, nrm, sizeof g->nrm);
     g->height = fabs(height);
     const double dmin = fan_distance((const double(*)[3])g->rel, m, nrm);
-    g->sliver = 64.0 * g->height <= dmin && 64.0 * dmin >= extent;
+    g->sliver = 64.0 * g->height <= dmin && 4.0 * dmin >= extent;
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
@@ -367,7 +367,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
 }
 
 /* Near-plane sliver regime (g->sliver: the foot F of x lies outside the triangles
- * of the vertex fan, at in-plane distance dmin >= extent / 64 from them, and
+ * of the vertex fan, at in-plane distance dmin >= extent / 4 from them, and
  * |h| <= dmin / 64).  The boundary recurrence sums O(1) edge terms to O(|h|) there
  * (relative error ~ eps dmin / |h|: <= 1e-13 at the switch), so the ZH integrals are
  * taken over the plane instead:
@@ -387,11 +387,12 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
  * s >= 2^(AREA_DEPTH+1) dmin / extent >= 1 in the regime; then N is the least with
  * rho^(2N) >= 1e16 10^(lmax/4) (capped at 24: rho^48 >= 2e18 for rho >= 1 + sqrt 2; the
  * l-term is empirical: 1e16 alone leaves 3e-12 at lmax 14).  The result's error is
- * then rounding, measured <= 1e-13 of the solid angle up to lmax 14, also 0.1
- * half-sides from an edge (tests/test_polygon_nearplane.c).  S_0 is the exact solid
- * angle.  Cost: (number of triangles) N^2 nodes x (2 lmax + 1) lobes x lmax bands,
- * ~40x the recurrence for a quad at dmin ~ extent (README table). */
-enum { NAREA_MAX = 24, AREA_DEPTH = 5 };
+ * then rounding, measured <= 1e-13 of the solid angle up to lmax 14
+ * (tests/test_polygon_nearplane.c).  S_0 is the exact solid angle.  Cost: (number of
+ * triangles) N^2 nodes x (2 lmax + 1) lobes x lmax bands: ~40x the recurrence for a
+ * quad at dmin ~ extent, ~170x at dmin = extent / 4 (the depth grows the cost ~4x
+ * per level, so closer feet keep the recurrence). */
+enum { NAREA_MAX = 24, AREA_DEPTH = 1 };
 
 typedef struct {
     double p[3][3], e[3][3]; /* corners: rel (scaled v - x) and in-plane offset from F */

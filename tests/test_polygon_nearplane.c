@@ -298,11 +298,12 @@ SHL_TEST(nearplane_grad_sweep)
     }
 }
 
-/* Foot of x close to an edge (0.2 and 0.1 half-sides outside it): the planar rule
- * subdivides its triangles (polygon.c); same targets and references. */
-SHL_TEST(nearplane_near_edge)
+/* Foot of x closer to an edge (1 and 0.75 half-sides outside it, the latter at the
+ * planar rule's limit dmin = extent / 4, where it subdivides the fan triangles nearest
+ * the foot, polygon.c); same targets and references. */
+SHL_TEST(nearplane_closer)
 {
-    const double k0s[2] = {1.2, 1.1}, hs[2] = {1e-4, 1e-9};
+    const double k0s[2] = {2.0, 1.75}, hs[2] = {1e-4, 1e-9};
     shl_ctx *ctx;
     CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
     const int nc = SHL_NCOEFFS(14);
