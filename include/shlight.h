@@ -87,7 +87,7 @@ int shl_eval_basis_f(int lmax, const float dir[3], float *y);
 int shl_polygon(const shl_ctx *ctx, const double x[3],
                 const double *verts, int n, double *coeffs);
 /** Float version: same semantics; the per-edge geometry is set up in double,
- *  the band recurrences run in float. */
+ *  the band recurrences run in float (the near-plane planar rule above in double). */
 int shl_polygon_f(const shl_ctx *ctx, const float x[3],
                   const float *verts, int n, float *coeffs);
 
