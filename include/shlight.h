@@ -91,11 +91,19 @@ int shl_eval_basis_f(int lmax, const float dir[3], float *y);
  * convex or concave, either winding (both give the same result).
  * A point in the polygon's plane sees no solid angle: all coefficients are 0.
  * Zero-length edges (repeated vertices) are skipped.
+ * Near the plane (distance h from it), with the foot of x outside the polygon at
+ * in-plane distance dmin >= 1/4 of the polygon's size from its vertex fan and
+ * h <= dmin/64, lmax <= 16: the integrals are taken by a Gauss rule on the
+ * polygon's plane (dw = h dA / r^3, h as an explicit factor), so the error stays
+ * below ~1e-13 of the solid angle however small h is (the boundary recurrence used
+ * elsewhere loses ~eps dmin / h there); 40x (dmin ~ size) to 170x (dmin = size/4)
+ * the cost of the recurrence for a quad at lmax 8, in that regime only.  Closer to
+ * an edge the recurrence stays, with its error ~eps dmin / h of the solid angle.
  */
 int shl_polygon(const shl_ctx *ctx, const double x[3],
                 const double *verts, int n, double *coeffs);
 /** Float version: same semantics; the per-edge geometry is set up in double,
- *  the band recurrences run in float. */
+ *  the band recurrences run in float (the near-plane planar rule above in double). */
 int shl_polygon_f(const shl_ctx *ctx, const float x[3],
                   const float *verts, int n, float *coeffs);
 
@@ -111,7 +119,13 @@ int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts,
 int shl_polygon_grad_f(const shl_ctx *ctx, const float x[3], const float *verts, int n,
                        float *coeffs, float *grad);
 
-/** Solid angle (steradians, >= 0) of the polygon seen from x; 0 in its plane. */
+/** Solid angle (steradians, >= 0) of the polygon seen from x; 0 in its plane
+ *  (within 8 eps x the largest vertex distance of it).  Relative accuracy a few
+ *  ulps times the planar conditioning (~ distance / depth of the polygon) also
+ *  near the plane: the plane distance h is computed in double-double from exact
+ *  coordinate differences, relative error <= 3 eps + 16 n eps^2 cond with cond the
+ *  componentwise condition number of N . (v_0 - x) (N the Newell normal; exact,
+ *  cond = 1, for an axis-aligned plane), and every fan term carries h as a factor. */
 int shl_polygon_solid_angle(const double x[3], const double *verts, int n, double *omega);
 
 /* ---- light sets (Wu et al. 2020, Alg. 1) ------------------------------- */

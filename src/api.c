@@ -97,7 +97,8 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
 }
 
 /* Float entry points: the geometry is set up in double from the float input,
- * the recurrences run in float, the ZH -> SH reconstruction accumulates in double. */
+ * the recurrences run in float (the near-plane planar rule in double, polygon.c),
+ * the ZH -> SH reconstruction accumulates in double. */
 static int float_polygon_input(const float x[3], const float *verts, int n, double xd[3], double *vd)
 {
     if (shl__check_finite_f(x, 3) || shl__check_finite_f(verts, 3 * n)) return SHL_ENONFINITE;

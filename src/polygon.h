@@ -26,6 +26,10 @@ typedef struct {
     double fprime1[SHL_MAX_VERTS];   /* f'(gamma_e) */
     double f_integral[SHL_MAX_VERTS]; /* I_0 = int_0^gamma f dt = f'(0) - f'(gamma) */
     double grad_scale[2];            /* product 2^-E: d/dx = 2^-E d/dx_scaled (shl__pow2_split) */
+    /* near-plane sliver regime (polygon.c, shl__poly_zh_area): ZH integrals by a Gauss rule on the plane */
+    int sliver;                      /* 1: the foot of x is outside the polygon, far from it, and |h| small */
+    double nrm[3];                   /* unit normal of the plane */
+    double height;                   /* |h|, distance of x from the plane (scaled units, a few ulps) */
 } shl__poly_geom;
 
 /* Build the geometry; the caller has validated n and finiteness. */
@@ -39,6 +43,11 @@ void shl__poly_zh_d(const shl__poly_geom *g, int lmax, double *zh);
 void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
+
+/* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3 (polygon.c);
+ * used by the four instances above when g->sliver and lmax <= SHL__AREA_LMAX. */
+void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
+#define SHL__AREA_LMAX 16
 
 /* Sparse ZH -> SH reconstruction (Wang 2018 Eq. 33) from the lobe table (zh_lobes.c);
  * zh laid out as above. */

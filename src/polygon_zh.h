@@ -33,6 +33,15 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 )
 {
     const int n = g->n, ndir = 2 * lmax + 1;
+#if !WITH_GRAD
+    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* near-plane sliver: planar Gauss rule (polygon.c) */
+        double area[SHL__ZH_BLOCK];
+        shl__poly_zh_area(g, lmax, area);
+        for (int dir = 0; dir < ndir; ++dir)
+            for (int l = 0; l <= lmax; ++l) zh[dir * SHL__ZH_STRIDE + l] = (REAL)area[dir * SHL__ZH_STRIDE + l];
+        return;
+    }
+#endif
     /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
     const int ltop = WITH_GRAD ? lmax : lmax - 1;
     REAL norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
@@ -126,4 +135,12 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #endif
         }
     }
+#if WITH_GRAD
+    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as the non-gradient instance */
+        double area[SHL__ZH_BLOCK];
+        shl__poly_zh_area(g, lmax, area);
+        for (int dir = 0; dir < ndir; ++dir)
+            for (int l = 0; l <= lmax; ++l) zh[dir * SHL__ZH_STRIDE + l] = (REAL)area[dir * SHL__ZH_STRIDE + l];
+    }
+#endif
 }
