@@ -1142,7 +1142,8 @@ static void sweep_row(FILE *csv, const char *scene_name, prt *p, const lighting_
 }
 
 /* One scene of the sweep.  mc[nmc]: Monte Carlo sample counts; double_lmax: the largest lmax of
- * the per-vertex double path (its cost grows fastest with the light count). */
+ * the per-vertex double path (the float path's error at 7-12x its time: 10-25 s a frame under
+ * 256 lights). */
 static void sweep_scene(FILE *csv, const char *file, const long *mc, int nmc, int double_lmax)
 {
     scene s;
