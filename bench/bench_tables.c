@@ -1098,80 +1098,108 @@ static void section_hvl(void)
 
 /* ---- What accuracy costs in time ------------------------------------------------ */
 
-static void sweep_row(FILE *csv, const char *scene_name, prt *p, const lighting_method *m, const char *param, const float *truth,
-                      double exposure, double raster, int reps)
+/* The band limits of the sweep: every method at each. */
+static const int sweep_lmax[] = {2, 4, 6, 8, 10, 14};
+enum { SWEEP_NL = sizeof sweep_lmax / sizeof sweep_lmax[0] };
+
+/* A frame rendered once; when it took under 0.3 s, twice more (times: the minimum per stage). */
+static prt_times sweep_render(prt *p, const lighting_method *m, float *img)
 {
-    char name[96];
+    prt_times t = render(p, m, NULL, 0, img, 1);
+    if (t.prepare + t.lighting + t.shade + t.resolve < 0.3) {
+        const prt_times u = render(p, m, NULL, 0, img, 2);
+        t.prepare = fmin(t.prepare, u.prepare);
+        t.lighting = fmin(t.lighting, u.lighting);
+        t.shade = fmin(t.shade, u.shade);
+        t.resolve = fmin(t.resolve, u.resolve);
+    }
+    return t;
+}
+
+static void sweep_row(FILE *csv, const char *scene_name, prt *p, const lighting_method *m, const char *family,
+                      const char *param, const float *truth, double exposure, double raster)
+{
     float *img = xmalloc(sizeof(float) * img_len(p->s));
-    const prt_times t = render(p, m, NULL, 0, img, reps);
+    const prt_times t = sweep_render(p, m, img);
     const image_error e = image_compare(p->s->width, p->s->height, img, truth, p->mask, exposure);
     const double frame = t.prepare + t.lighting + t.shade + t.resolve + raster;
-    lighting_name(m, name, sizeof name);
-    const char *family = m->kind == LM_ANALYTIC ? "analytic double"
-                         : m->kind == LM_ANALYTIC_F ? "analytic float"
-                         : m->kind == LM_MC ? "Monte Carlo"
-                         : m->interp == SHL_INTERP_HERMITE ? (m->grid_storage == SHL_GRID_DOUBLE ? "grid Hermite double" : "grid Hermite")
-                         : m->interp == SHL_INTERP_TRILINEAR ? "grid trilinear"
-                                                             : "grid Taylor";
-    fprintf(md, "| %s | %s | %.2f | %.3f | %.2e | %.2e |\n", family, param, frame * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref,
-            e.rmse / e.mean_ref);
+    if (m->kind == LM_GRID)
+        fprintf(md, "| %s | lmax %d | %s | %.2f | %.2f | %.3f | %.2e | %.2e |\n", family, m->lmax, param, frame * 1e3,
+                (frame - t.prepare) * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
+    else
+        fprintf(md, "| %s | lmax %d | %s | %.2f | - | %.3f | %.2e | %.2e |\n", family, m->lmax, param, frame * 1e3,
+                e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
     csv_text(csv, scene_name);
     fputc(',', csv);
     csv_text(csv, family);
-    fputc(',', csv);
+    fprintf(csv, ",%d,", m->lmax);
     csv_text(csv, param);
-    fprintf(csv, ",%.5f,%.5f,%.5f,%.6f,%.5e,%.5e\n", frame * 1e3, (t.prepare + t.lighting) * 1e3, t.shade * 1e3,
-            e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
+    fprintf(csv, ",%.5f,%.5f,%.5f,%.5f,%.6f,%.5e,%.5e\n", frame * 1e3, t.prepare * 1e3, (t.prepare + t.lighting) * 1e3,
+            t.shade * 1e3, e.mae_srgb * 1e3, e.mae / e.mean_ref, e.rmse / e.mean_ref);
     fflush(md);
     fflush(csv);
     free(img);
 }
 
-static void sweep_scene(FILE *csv, const char *file, int glossy)
+/* One scene of the sweep.  mc[nmc]: Monte Carlo sample counts; double_lmax: the largest lmax of
+ * the per-vertex double path (the float path's error at 7-12x its time: 10-25 s a frame under
+ * 256 lights). */
+static void sweep_scene(FILE *csv, const char *file, const long *mc, int nmc, int double_lmax)
 {
     scene s;
     if (load_scene(file, NULL, &s)) return;
+    const int glossy = s.effects & FX_GLOSSY;
     prt p;
     init_prt(&p, &s);
     float *truth = xmalloc(sizeof(float) * img_len(&s));
-    if (glossy) {
-        const lighting_method m = method(LM_ANALYTIC, s.lmax);
+    char truth_name[160];
+    if (glossy) { /* no closed form for the glossy lobes: the double path at the scene's lmax */
+        const lighting_method m = method(LM_ANALYTIC, s.lmax), m4 = method(LM_ANALYTIC, s.lmax - 4);
+        float *lower = xmalloc(sizeof(float) * img_len(&s));
         render(&p, &m, NULL, 0, truth, 1);
-    } else {
+        render(&p, &m4, NULL, 0, lower, 1);
+        const image_error e = image_compare(s.width, s.height, lower, truth, p.mask, prt_exposure(&p, truth));
+        snprintf(truth_name, sizeof truth_name, "per-vertex analytic (double) at lmax %d (at lmax %d it differs by %.1e "
+                 "rel. MAE; the glossy lobes' coefficients fall off fast)", s.lmax, s.lmax - 4, e.mae / e.mean_ref);
+        free(lower);
+    } else { /* unshadowed diffuse: exact, and independent of the library's SH code */
         float *v = xmalloc(sizeof(float) * 3 * (size_t)s.geom.nv);
         lambert_scene(&s, v);
         const float *colors[3] = {v, p.emit_rgb[0], p.emit_rgb[1]};
         raster_resolve(&p.fb, p.rm, colors, truth, nthreads);
         free(v);
+        snprintf(truth_name, sizeof truth_name, "Lambert's closed form per vertex (exact), resolved like every method");
     }
     const double exposure = prt_exposure(&p, truth), raster = raster_time(&p, 3);
-    fprintf(md, "\n### %s: %d vertices, %d lights; truth: %s\n\n| method | parameter | frame ms | MAE x1e-3 (sRGB) | rel. MAE | rel. RMSE |\n"
-                "|---|---|---|---|---|---|\n",
-            s.name, s.geom.nv, s.npolys, glossy ? "per-vertex analytic at lmax 24" : "Lambert's closed form per vertex (exact)");
-    char param[32];
-    for (int l = 2; l <= 14; l += 2) {
-        snprintf(param, sizeof param, "lmax %d", l);
-        const lighting_method md_ = method(LM_ANALYTIC, l), mf = method(LM_ANALYTIC_F, l);
-        sweep_row(csv, s.name, &p, &md_, param, truth, exposure, raster, 2);
-        sweep_row(csv, s.name, &p, &mf, param, truth, exposure, raster, 2);
-    }
-    const int res[] = {4, 6, 8, 12, 16, 24, 32};
-    for (unsigned i = 0; i < sizeof res / sizeof res[0]; ++i) {
-        snprintf(param, sizeof param, "%d^3, lmax 8", res[i]);
-        const int interps[3] = {SHL_INTERP_HERMITE, SHL_INTERP_TRILINEAR, SHL_INTERP_TAYLOR};
+    fprintf(md, "\n### %s: %d vertices, %d lights\n\nReference: %s.\n\n"
+                "| method | lmax | parameter | frame ms | frame ms, static lights | MAE x1e-3 (sRGB) | rel. MAE | rel. RMSE |\n"
+                "|---|---|---|---|---|---|---|---|\n",
+            s.name, s.geom.nv, s.npolys, truth_name);
+    char param[48];
+    for (int i = 0; i < SWEEP_NL; ++i) {
+        const int l = sweep_lmax[i];
+        bench_progress("%s: lmax %d", s.name, l);
+        const lighting_method mf = method(LM_ANALYTIC_F, l), md_ = method(LM_ANALYTIC, l);
+        sweep_row(csv, s.name, &p, &mf, "per-vertex float", "-", truth, exposure, raster);
+        if (l <= double_lmax) sweep_row(csv, s.name, &p, &md_, "per-vertex double", "-", truth, exposure, raster);
+        const int res[3] = {8, 16, 32};
         for (int k = 0; k < 3; ++k) {
-            const lighting_method m = grid(8, res[i], interps[k]);
-            sweep_row(csv, s.name, &p, &m, param, truth, exposure, raster, 2);
+            snprintf(param, sizeof param, "%d^3", res[k]);
+            char family[32];
+            snprintf(family, sizeof family, "grid %d^3 Hermite", res[k]);
+            const lighting_method m = grid(l, res[k], SHL_INTERP_HERMITE);
+            sweep_row(csv, s.name, &p, &m, family, param, truth, exposure, raster);
         }
-        lighting_method m = grid(8, res[i], SHL_INTERP_HERMITE);
-        m.grid_storage = SHL_GRID_DOUBLE;
-        sweep_row(csv, s.name, &p, &m, param, truth, exposure, raster, 2);
-    }
-    for (long n = 16; n <= 65536; n *= 4) {
-        snprintf(param, sizeof param, "%ld samples, lmax 8", n);
-        lighting_method m = method(LM_MC, 8);
-        m.mc_samples = n;
-        sweep_row(csv, s.name, &p, &m, param, truth, exposure, raster, 1);
+        const lighting_method mt = grid(l, 16, SHL_INTERP_TRILINEAR);
+        sweep_row(csv, s.name, &p, &mt, "grid 16^3 trilinear", "16^3", truth, exposure, raster);
+        for (int k = 0; k < nmc; ++k) {
+            char family[32];
+            snprintf(family, sizeof family, "Monte Carlo %ld", mc[k]);
+            snprintf(param, sizeof param, "%ld samples", mc[k]);
+            lighting_method m = method(LM_MC, l);
+            m.mc_samples = mc[k];
+            sweep_row(csv, s.name, &p, &m, family, param, truth, exposure, raster);
+        }
     }
     free(truth);
     prt_free(&p);
@@ -1180,18 +1208,25 @@ static void sweep_scene(FILE *csv, const char *file, int glossy)
 
 static void section_sweep(void)
 {
-    fprintf(md, "\n## What accuracy costs in time: image error vs frame time, one curve per method\n\n"
-                "Two small procedural scenes (bench/scenes/sweep-*.scene), %d threads.  Curves: per-vertex analytic\n"
-                "shading at lmax 2..14 in double (shl_lights_eval_batch) and float (shl_lights_eval_batch_f); grids\n"
-                "4^3..32^3 at lmax 8 with Hermite, trilinear and Taylor interpolation (float nodes) and Hermite on\n"
-                "double nodes; Monte Carlo projection with 16..65536 samples per vertex at lmax 8.  Frame: lighting\n"
-                "(+ grid fill) + shading + visibility raster + resolve, best of 2 (Monte Carlo: 1).  Errors against\n"
-                "the truth named per scene, over the pixels showing receivers; methods at lmax 8 keep the lmax-8\n"
-                "truncation error as a floor.  Plot: `tools/plot.py` (bench/plots/).\n",
+    static const long mc_small[] = {16, 128, 1024}, mc_many[] = {16, 64, 256};
+    fprintf(md, "\n## What accuracy costs in time: image error vs frame time, every method at every lmax\n\n"
+                "Three procedural scenes (bench/scenes/sweep-*.scene), %d threads: two with 3 lights on 2.9K vertices\n"
+                "(diffuse, glossy) and one with 256 small lights on 22.6K vertices (diffuse).  At each lmax of 2, 4,\n"
+                "6, 8, 10, 14: per-vertex analytic shading in float (shl_lights_eval_batch_f, SIMD) and double\n"
+                "(shl_lights_eval_batch; on the many-light scene at lmax 2 only: it has the float path's error at\n"
+                "7-12x its time, 10-25 s a frame there); grids 8^3, 16^3, 32^3 (float nodes) with Hermite\n"
+                "interpolation and 16^3 with trilinear; Monte Carlo projection (16, 128, 1024 samples per vertex;\n"
+                "many-light scene 16, 64, 256).  Frame: lighting (+ grid fill) + shading + visibility raster +\n"
+                "resolve, the minimum per stage of 3 runs (1 run when a frame takes 0.3 s or more); for grids also\n"
+                "without the fill (static lights: the grid filled once).  A method at lmax L keeps the lmax-L\n"
+                "truncation error (the per-vertex rows at L) as its floor.  Plots: `tools/plot.py` (bench/plots/\n"
+                "accuracy_vs_time_<scene>.png, the Pareto front of the full frames ringed and listed).\n",
             nthreads);
-    FILE *csv = csv_open("accuracy_vs_time.csv", "scene,method,parameter,frame_ms,lighting_ms,shade_ms,mae_srgb_1e3,rel_mae,rel_rmse");
-    sweep_scene(csv, "sweep-diffuse.scene", 0);
-    sweep_scene(csv, "sweep-glossy.scene", 1);
+    FILE *csv = csv_open("accuracy_vs_time.csv", "scene,method,lmax,parameter,frame_ms,fill_ms,lighting_ms,shade_ms,"
+                                                 "mae_srgb_1e3,rel_mae,rel_rmse");
+    sweep_scene(csv, "sweep-diffuse.scene", mc_small, 3, 14);
+    sweep_scene(csv, "sweep-glossy.scene", mc_small, 3, 14);
+    sweep_scene(csv, "sweep-many.scene", mc_many, 3, 2);
     csv_close(csv, "accuracy_vs_time.csv");
 }
 
@@ -1249,7 +1284,7 @@ int main(int argc, char **argv)
         "The results tables of four papers (Wu 2020 Table 1 and Figs. 8-9, Wang 2018 Table 2, Annen 2004\n"
         "Table 1, HVL 2022 Table 1) and an accuracy-vs-time sweep, reproduced with the software-rasterized\n"
         "PRT harness on 17 scenes (bench/scenes).  About 4 minutes on an idle 2-core machine (sections:\n"
-        "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 10 s, sweep 70 s); progress on stderr.\n"
+        "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 10 s, sweep 2 min); progress on stderr.\n"
         "\n"
         "sections: wu wu-fig8 wu-fig9 wang annen hvl sweep (default: all; a subset is marked incomplete).\n"
         "\n"

@@ -9,7 +9,7 @@ touches tracked files; `make bench-tables-accept` then copies a complete run's t
 plots over bench/tables/ and bench/plots/.
 
 Writes SVG and PNG files:
-  accuracy_vs_time_<scene>  image error vs frame time, one curve per method
+  accuracy_vs_time_<scene>  image error vs frame time, every method at every lmax, Pareto front
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
@@ -47,71 +47,80 @@ def save(fig, out, name, exts=("svg", "png")):
     print(f"wrote {out}/{name}: {', '.join(exts)}")
 
 
-def short_label(family, parameter):
-    """'lmax 8' -> 'L8', '16^3, lmax 8' -> '16^3', '4096 samples, lmax 8' -> '4096 spp'."""
-    head = parameter.split(",")[0].strip()
-    if head.startswith("lmax "):
-        return "L" + head[5:]
-    if head.endswith(" samples"):
-        return head[:-8] + " spp"
-    return head
-
-
 def pareto(points):
     """The points no other point beats in both time and error, by increasing time."""
     front, best = [], float("inf")
-    for x, y in sorted(points):
-        if y < best:
-            front.append((x, y))
-            best = y
+    for p in sorted(points, key=lambda p: (p[0], p[1])):
+        if p[1] < best:
+            front.append(p)
+            best = p[1]
     return front
 
 
+SWEEP_STYLE = {  # family -> colour, marker
+    "per-vertex float": ("tab:blue", "o"),
+    "per-vertex double": ("tab:cyan", "s"),
+    "grid 8^3 Hermite": ("tab:orange", "^"),
+    "grid 16^3 Hermite": ("tab:red", "v"),
+    "grid 32^3 Hermite": ("tab:brown", "D"),
+    "grid 16^3 trilinear": ("tab:pink", "<"),
+}
+MC_COLOURS = ("tab:olive", "tab:green", "darkgreen", "black")
+
+
 def accuracy_vs_time(rows, out):
+    """One plot per scene: every method at every lmax (numbers beside the points), grids also with
+    static lights (hollow markers: frame without the fill), the Pareto front of the full frames
+    ringed and listed beside the axes."""
     scenes = OrderedDict()
     for r in rows:
         scenes.setdefault(r["scene"], OrderedDict()).setdefault(r["method"], []).append(r)
     for scene, methods in scenes.items():
-        fig, ax = plt.subplots(figsize=(8.5, 5.8))
-        allpts, grid_cols = [], OrderedDict()
-        for i, (method, pts) in enumerate(methods.items()):
+        fig, ax = plt.subplots(figsize=(10.5, 6.5))
+        allpts, nmc, floors = [], 0, {}
+        for method, pts in methods.items():
+            pts = sorted(pts, key=lambda p: int(p["lmax"]))
+            if method in SWEEP_STYLE:
+                colour, marker = SWEEP_STYLE[method]
+            else:
+                colour, marker = MC_COLOURS[min(nmc, len(MC_COLOURS) - 1)], "x"
+                nmc += 1
             x = [float(p["frame_ms"]) for p in pts]
             y = [max(float(p["rel_mae"]), 1e-9) for p in pts]
-            allpts += list(zip(x, y))
-            ax.plot(x, y, marker="o", markersize=3.5, label=method, color=f"C{i}")
-            if method.startswith("grid"):
-                # the grid curves share their resolutions: one label per resolution, above its points
-                for p, xi, yi in zip(pts, x, y):
-                    grid_cols.setdefault(short_label(method, p["parameter"]), []).append((xi, yi))
-                continue
-            below = method == "analytic float"  # same errors as double at each lmax: label it below
+            allpts += [(xi, yi, method, p) for xi, yi, p in zip(x, y, pts)]
+            ax.plot(x, y, marker=marker, markersize=4.5, color=colour, linewidth=1, label=method)
             for p, xi, yi in zip(pts, x, y):
-                ax.annotate(short_label(method, p["parameter"]), (xi, yi), fontsize=6.5, color=f"C{i}",
-                            xytext=(-3, -9) if below else (3, 3), textcoords="offset points",
-                            ha="right" if below else "left")
-        for label, pts in grid_cols.items():
-            xi = sorted(p[0] for p in pts)[len(pts) // 2]
-            yi = max(p[1] for p in pts)
-            ax.annotate(label, (xi, yi), fontsize=6.5, xytext=(0, 6), textcoords="offset points", ha="center")
-        front = pareto(allpts)
-        ax.plot([p[0] for p in front], [p[1] for p in front], color="black", linewidth=6, alpha=0.15,
-                solid_capstyle="round", label="Pareto front (no point faster and more accurate)", zorder=0)
-        floor = [r for r in rows if r["scene"] == scene and r["method"] == "analytic double"
-                 and r["parameter"] == "lmax 8"]
-        if floor:
-            ax.axhline(float(floor[0]["rel_mae"]), color="grey", linestyle=":", linewidth=1)
-            ax.annotate("lmax 8 truncation error: the floor of the grid and Monte Carlo curves",
-                        (ax.get_xlim()[0], float(floor[0]["rel_mae"])), fontsize=6.5, color="grey",
-                        xytext=(4, -9), textcoords="offset points")
+                ax.annotate(p["lmax"], (xi, yi), fontsize=6, color=colour, xytext=(3, 2), textcoords="offset points")
+            if method == "per-vertex float":
+                floors = {p["lmax"]: yi for p, yi in zip(pts, y)}
+            if method.startswith("grid") and "Hermite" in method:
+                xs = [float(p["frame_ms"]) - float(p["fill_ms"]) for p in pts]
+                ax.plot(xs, y, marker=marker, markersize=4.5, color=colour, linewidth=0.8, linestyle=":", alpha=0.6,
+                        markerfacecolor="none", label=f"{method}, static lights (no fill)")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("frame time (ms)")
+        for yi in floors.values():  # the truncation error of each lmax: every method's floor there
+            ax.axhline(yi, color="grey", linestyle=(0, (1, 4)), linewidth=0.7, zorder=0)
+        front = pareto(allpts)
+        ax.plot([p[0] for p in front], [p[1] for p in front], color="black", linewidth=6, alpha=0.15,
+                solid_capstyle="round", zorder=0, label="Pareto front (no point faster and more accurate)")
+        ax.scatter([p[0] for p in front], [p[1] for p in front], s=80, facecolors="none", edgecolors="black",
+                   linewidths=0.8, zorder=3)
+        text = "Pareto front, lights moving\n(fastest first):\n" + "\n".join(
+            f"{p[2]}, lmax {p[3]['lmax']}: {p[0]:.3g} ms, {p[1]:.2e}" for p in front)
+        ax.text(1.13, 0.0, text, transform=ax.transAxes, fontsize=7, va="bottom", ha="left", family="monospace")
+        ax.set_xlabel("frame time (ms): lighting (+ grid fill) + shading + raster + resolve")
         ax.set_ylabel("image MAE / mean radiance")
         ax.set_title(f"What accuracy costs in time: {scene}\n"
-                     "(L = lmax of per-vertex analytic; grid labels = resolution at lmax 8; spp = Monte Carlo samples)",
+                     "(numbers beside the points: lmax; hollow markers: grids with static lights, filled once)",
                      fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.12, 1.0))
+        right = ax.twinx()  # the floors named on the right axis, clear of the points
+        right.set_yscale("log")
+        right.set_ylim(ax.get_ylim())
+        right.set_yticks(list(floors.values()), [f"lmax {k} floor" for k in floors], fontsize=6.5, color="grey")
+        right.minorticks_off()
         save(fig, out, f"accuracy_vs_time_{scene}")
 
 
