@@ -1283,7 +1283,7 @@ int main(int argc, char **argv)
         "bench_tables", "[-o DIR] [-m DIR] [section ...]",
         "The results tables of four papers (Wu 2020 Table 1 and Figs. 8-9, Wang 2018 Table 2, Annen 2004\n"
         "Table 1, HVL 2022 Table 1) and an accuracy-vs-time sweep, reproduced with the software-rasterized\n"
-        "PRT harness on 17 scenes (bench/scenes).  About 4 minutes on an idle 2-core machine (sections:\n"
+        "PRT harness on 19 scenes (bench/scenes).  About 4 minutes on an idle 2-core machine (sections:\n"
         "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 10 s, sweep 2 min); progress on stderr.\n"
         "\n"
         "sections: wu wu-fig8 wu-fig9 wang annen hvl sweep (default: all; a subset is marked incomplete).\n"
