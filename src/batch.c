@@ -68,11 +68,17 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
  * cf. lanes_setup in simd/poly_batch.h.  Distances in the scaled units of P.
  * Also the points where the float boundary sums cancel: the kernel's error is about
  * FLT_EPSILON sum_e gamma_e / omega of omega (cf. shl__poly_zh_f, polygon.c; measured
- * 2.5e-4 for a square 1e-3 rad across, where the ratio is 4e3), and with edge arcs
- * gamma_e ~ |edge_e| / r, omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the ratio
- * is about 2 perimeter r^2 / |h|.  Beyond 2^9 (a square 1/128 rad across, float
- * error there <= 5e-5; or a point within ~1e-2 r of a light's plane) the point takes
- * the scalar path, whose double recurrence keeps ~1e-7 of omega. */
+ * 2.5e-4 for a square 1e-3 rad across, where the ratio is 4e3).  With edge arcs
+ * gamma_e ~ |edge_e| / r and omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the
+ * ratio is about 2 perimeter r^2 / |h|, and at least 4 r / perimeter.  Two cases take
+ * the scalar path, whose double recurrence keeps ~1e-7 of omega:
+ *  - small lights, perimeter < r / 32 (a square under 1/128 rad: ratio > 2^9; the
+ *    kernel's error above is <= 5e-5 of omega);
+ *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
+ *    ~1e-3 of omega; for a unit square at r = 3, h < 6e-4).  The band between, where
+ *    the kernel keeps 3e-5..1e-3 of omega (h/r ~ 1e-2..1e-4), stays on the kernel:
+ *    routing it (ratio > 2^9) cost +23% in a room with a ceiling light (5% of the
+ *    points routed, each at ~5 kernel lanes' cost). */
 static int float_unresolved(const shl__batch_poly *P, double perimeter, const float *pt)
 {
     double x[3], rmax2 = 0.0, rmin2 = HUGE_VAL;
@@ -87,7 +93,8 @@ static int float_unresolved(const shl__batch_poly *P, double perimeter, const fl
                      P->normal[2] * (P->vd[0][2] - x[2]);
     const double h2 = h * h, tol = 8.0 * DBL_EPSILON, band = 0x1p-32 * rmax2 * P->len2;
     return rmax2 <= 0x1p80 && h2 > tol * tol * rmax2 * P->len2 &&
-           (h2 <= band || rmin2 < 0x1p-32 || perimeter * rmax2 > 0x1p8 * fabs(h));
+           (h2 <= band || rmin2 < 0x1p-32 || perimeter * perimeter * 0x1p10 < rmin2 ||
+            perimeter * rmax2 > 0x1p13 * fabs(h));
 }
 
 /* Such a point takes the scalar path of shl_polygon_grad_f (geometry in double). */
