@@ -75,10 +75,10 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
  *  - small lights, perimeter < r / 32 (a square under 1/128 rad: ratio > 2^9; the
  *    kernel's error above is <= 5e-5 of omega);
  *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
- *    ~1e-3 of omega; for a unit square at r = 3, h < 6e-4).  The band between, where
- *    the kernel keeps 3e-5..1e-3 of omega (h/r ~ 1e-2..1e-4), stays on the kernel:
- *    routing it (ratio > 2^9) cost +23% in a room with a ceiling light (5% of the
- *    points routed, each at ~5 kernel lanes' cost). */
+ *    there ~1e-3 of omega; the square (+-1, +-1, 0) seen from (3, 0.5, h): h < 2.2e-3).
+ *    The band above, where the kernel keeps 3e-5..2e-4 of omega (there h = 1e-2..3e-3),
+ *    stays on the kernel: routing it (ratio > 2^9) cost +23% in a room with a ceiling
+ *    light (~5% of the points routed, each at ~5 kernel lanes' cost). */
 static int float_unresolved(const shl__batch_poly *P, double perimeter, const float *pt)
 {
     double x[3], rmax2 = 0.0, rmin2 = HUGE_VAL;
