@@ -72,7 +72,7 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
  * gamma_e ~ |edge_e| / r and omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the
  * ratio is about 2 perimeter r^2 / |h|, and at least 4 r / perimeter.  Two cases take
  * the scalar path, whose double recurrence keeps ~1e-7 of omega:
- *  - small lights, perimeter < r / 32 (a square under 1/128 rad: ratio > 2^9; the
+ *  - small lights, perimeter < r_min / 32 (a square under 1/128 rad: ratio > 2^9; the
  *    kernel's error above is <= 5e-5 of omega);
  *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
  *    there ~1e-3 of omega; the square (+-1, +-1, 0) seen from (3, 0.5, h): h < 2.2e-3).
