@@ -103,7 +103,12 @@ int shl_eval_basis_f(int lmax, const float dir[3], float *y);
 int shl_polygon(const shl_ctx *ctx, const double x[3],
                 const double *verts, int n, double *coeffs);
 /** Float version: same semantics; the per-edge geometry is set up in double,
- *  the band recurrences run in float (the near-plane planar rule above in double). */
+ *  the band recurrences run in float (the near-plane planar rule above in double).
+ *  Where float would lose the boundary sums (sum of the edges' arc angles above
+ *  2^7 solid angles: polygons under ~1/32 rad, or seen at grazing angles) the
+ *  recurrence runs in double and the result is rounded: error ~1e-7 of the
+ *  solid angle down to 1e-5 rad (float recurrence: ~2.5e-7 / angular size).
+ *  The same for shl_polygon_grad_f. */
 int shl_polygon_f(const shl_ctx *ctx, const float x[3],
                   const float *verts, int n, float *coeffs);
 
@@ -605,7 +610,10 @@ int shl_hvl_radius_fov(int count, const double *dist, double fov, double scale, 
  * double); a point farther than 2^40 times the polygon's extent gets zeros
  * (float range).  Accuracy is that of float arithmetic on the whole geometry:
  * see README "Batch evaluation and SIMD" (the error relative to L00 grows like
- * 1/angular size for small polygons).  pts and coeffs may be NULL when npts is 0.
+ * 1/angular size); points from which the polygon's perimeter is below 1/32 of
+ * the distance (a square under 1/128 rad) or which lie very close to its plane
+ * take the scalar path of shl_polygon_grad_f, so small lights keep ~1e-7 of the
+ * solid angle.  pts and coeffs may be NULL when npts is 0.
  * All points are checked before anything is written.  Allocates one workspace
  * per call of 4 vlen (3 nq (lmax+1)^2 + 14 lmax + 1825) + 64 bytes, nq = 4 with
  * gradients, 1 without (AVX2, lmax 30, gradients: 441 KB; SHL_ENOMEM);

@@ -65,8 +65,21 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
  * normal component, would be decided by float rounding), or within 2^-16 extents of
  * a vertex (float cannot separate them from it).  Not those of the kernel's own
  * cases: in the plane by the double test (zeros) or beyond 2^40 extents (zeros);
- * cf. lanes_setup in simd/poly_batch.h.  Distances in the scaled units of P. */
-static int float_unresolved(const shl__batch_poly *P, const float *pt)
+ * cf. lanes_setup in simd/poly_batch.h.  Distances in the scaled units of P.
+ * Also the points where the float boundary sums cancel: the kernel's error is about
+ * FLT_EPSILON sum_e gamma_e / omega of omega (cf. shl__poly_zh_f, polygon.c; measured
+ * 2.5e-4 for a square 1e-3 rad across, where the ratio is 4e3).  With edge arcs
+ * gamma_e ~ |edge_e| / r and omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the
+ * ratio is about 2 perimeter r^2 / |h|, and at least 4 r / perimeter.  Two cases take
+ * the scalar path, whose double recurrence keeps ~1e-7 of omega:
+ *  - small lights, perimeter < r_min / 32 (a square under 1/128 rad: ratio > 2^9; the
+ *    kernel's error above is <= 5e-5 of omega);
+ *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
+ *    there ~1e-3 of omega; the square (+-1, +-1, 0) seen from (3, 0.5, h): h < 2.2e-3).
+ *    The band above, where the kernel keeps 3e-5..2e-4 of omega (there h = 1e-2..3e-3),
+ *    stays on the kernel: routing it (ratio > 2^9) cost +23% in a room with a ceiling
+ *    light (~5% of the points routed, each at ~5 kernel lanes' cost). */
+static int float_unresolved(const shl__batch_poly *P, double perimeter, const float *pt)
 {
     double x[3], rmax2 = 0.0, rmin2 = HUGE_VAL;
     for (int k = 0; k < 3; ++k) x[k] = pt[k] * P->inv_scale;
@@ -79,7 +92,9 @@ static int float_unresolved(const shl__batch_poly *P, const float *pt)
     const double h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
                      P->normal[2] * (P->vd[0][2] - x[2]);
     const double h2 = h * h, tol = 8.0 * DBL_EPSILON, band = 0x1p-32 * rmax2 * P->len2;
-    return rmax2 <= 0x1p80 && h2 > tol * tol * rmax2 * P->len2 && (h2 <= band || rmin2 < 0x1p-32);
+    return rmax2 <= 0x1p80 && h2 > tol * tol * rmax2 * P->len2 &&
+           (h2 <= band || rmin2 < 0x1p-32 || perimeter * perimeter * 0x1p10 < rmin2 ||
+            perimeter * rmax2 > 0x1p13 * fabs(h));
 }
 
 /* Such a point takes the scalar path of shl_polygon_grad_f (geometry in double). */
@@ -106,8 +121,15 @@ void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const do
         return;
     }
     ctx->isa->poly_batch(P, ctx->lmax, npts, pts, coeffs, grad, work);
+    double perimeter = 0.0; /* scaled units */
+    for (int i = 0; i < P->n; ++i) {
+        const int f = i + 1 == P->n ? 0 : i + 1;
+        double d[3];
+        for (int k = 0; k < 3; ++k) d[k] = P->vd[f][k] - P->vd[i][k];
+        perimeter += sqrt(shl__dot3(d, d));
+    }
     for (int p = 0; p < npts; ++p)
-        if (float_unresolved(P, pts + 3 * (size_t)p))
+        if (float_unresolved(P, perimeter, pts + 3 * (size_t)p))
             shl__batch_poly_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
 }
 

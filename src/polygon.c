@@ -478,15 +478,62 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
 #undef WITH_GRAD
 #undef REAL
 
+/* Float instances of the recurrence (fk: float kernel), wrapped below. */
+void shl__poly_zh_fk(const shl__poly_geom *g, int lmax, float *zh);
+void shl__poly_zh_grad_fk(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
 #define REAL float
 #define WITH_GRAD 0
-#define SUFFIX(name) name##_f
+#define SUFFIX(name) name##_fk
 #include "polygon_zh.h"
 #undef SUFFIX
 #undef WITH_GRAD
 #define WITH_GRAD 1
-#define SUFFIX(name) name##_grad_f
+#define SUFFIX(name) name##_grad_fk
 #include "polygon_zh.h"
 #undef SUFFIX
 #undef WITH_GRAD
 #undef REAL
+
+/* Small or grazing polygons: the boundary sums of Eq. 14 and Eq. 24 add O(gamma_e)
+ * edge terms that cancel down to O(omega), so float rounding of the terms costs
+ * about FLT_EPSILON sum_e gamma_e / omega relative to omega (measured: 1.5e-5 for a
+ * square 1e-2 rad across, sum gamma / omega = 400; 2e-2 at 1e-5 rad).  Beyond
+ * sum gamma / omega = 2^7 (a square 1/32 rad across; float error there <= 6e-6)
+ * the float entry points run the double recurrence and round its result: for
+ * scalar code the cost is about the float one's. */
+#define SHL__FLOAT_CANCEL_MAX 0x1p7
+static int float_cancels(const shl__poly_geom *g)
+{
+    double perimeter = 0.0;
+    for (int e = 0; e < g->n; ++e) perimeter += g->gamma[e];
+    return !(perimeter <= SHL__FLOAT_CANCEL_MAX * fabs(g->solid_angle));
+}
+
+static void round_block(int lmax, const double *zh, float *out)
+{
+    for (int dir = 0; dir < 2 * lmax + 1; ++dir)
+        for (int l = 0; l <= lmax; ++l) out[dir * SHL__ZH_STRIDE + l] = (float)zh[dir * SHL__ZH_STRIDE + l];
+}
+
+void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh)
+{
+    if (!float_cancels(g)) {
+        shl__poly_zh_fk(g, lmax, zh);
+        return;
+    }
+    double zd[SHL__ZH_BLOCK];
+    shl__poly_zh_d(g, lmax, zd);
+    round_block(lmax, zd, zh);
+}
+
+void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad)
+{
+    if (!float_cancels(g)) {
+        shl__poly_zh_grad_fk(g, lmax, zh, zh_grad);
+        return;
+    }
+    double zd[4 * SHL__ZH_BLOCK]; /* zh, then the 3 gradient blocks */
+    shl__poly_zh_grad_d(g, lmax, zd, zd + SHL__ZH_BLOCK);
+    round_block(lmax, zd, zh);
+    for (int a = 0; a < 3; ++a) round_block(lmax, zd + (a + 1) * SHL__ZH_BLOCK, zh_grad + a * SHL__ZH_BLOCK);
+}

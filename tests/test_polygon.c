@@ -125,6 +125,59 @@ SHL_TEST(polygon_float_error_vs_angular_size)
     shl_ctx_destroy(ctx);
 }
 
+/* Square of side theta * d (float vertices), its centre about d from x (float),
+ * tilted (z rises 0.3 side across it): angular size ~theta (issue 18's sweep). */
+static void small_square(double theta, double d, float vf[12], float xf[3])
+{
+    const double s = theta * d;
+    const double v[12] = {0.3 * d, 0.2 * d, d, 0.3 * d + s, 0.2 * d, d,
+                          0.3 * d + s, 0.2 * d + s, d + 0.3 * s, 0.3 * d, 0.2 * d + s, d + 0.3 * s};
+    for (int k = 0; k < 12; ++k) vf[k] = (float)v[k];
+    xf[0] = 0.05f, xf[1] = -0.1f, xf[2] = 0.02f;
+}
+
+/* Small lights in float: angular size theta = 1e-3, 1e-4, 1e-5 at distances 1, 10,
+ * 100, against the quadrature reference on the float-rounded input (so only the
+ * float path's arithmetic is measured).  Without routing the float recurrence's
+ * boundary sums cancel to ~FLT_EPSILON sum gamma / omega = 2.5e-7 / theta of omega
+ * (1.85e-2 at 1e-5); these polygons (sum gamma / omega ~ 4 / theta > 2^7) run the
+ * double recurrence, whose error is ~DBL_EPSILON / theta (< 1e-10), then float
+ * rounding of the ZH integrals and of the float ZH -> SH sum, a few FLT_EPSILON.
+ * Tolerances: the float contract of issue 18, 1e-4 of omega at theta = 1e-3 and
+ * 1e-3 below (both far above the analysis' ~1e-6). */
+SHL_TEST(polygon_float_small_lights)
+{
+    static const int lmaxes[] = {8, 14};
+    for (int li = 0; li < 2; ++li) {
+        const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
+        shl_ctx *ctx;
+        CHECK(shl_ctx_create(lmax, &ctx) == SHL_OK);
+        double worst[3] = {0, 0, 0};
+        for (int ai = 0; ai < 3; ++ai)
+            for (int di = 0; di < 3; ++di) {
+                const double theta = ai == 0 ? 1e-3 : ai == 1 ? 1e-4 : 1e-5, d = di == 0 ? 1.0 : di == 1 ? 10.0 : 100.0;
+                float vf[12], xf[3], got[NCMAX], gotg[NCMAX], grad[3 * NCMAX];
+                small_square(theta, d, vf, xf);
+                double v[12], x[3] = {xf[0], xf[1], xf[2]}, want[NCMAX], omega;
+                for (int k = 0; k < 12; ++k) v[k] = vf[k];
+                CHECK(ref_polygon_sh(lmax, x, v, 4, want, NULL) == 0);
+                omega = ref_polygon_solid_angle(x, v, 4);
+                CHECK(shl_polygon_f(ctx, xf, vf, 4, got) == SHL_OK);
+                CHECK(shl_polygon_grad_f(ctx, xf, vf, 4, gotg, grad) == SHL_OK);
+                double e = 0.0;
+                for (int k = 0; k < nc; ++k)
+                    e = fmax(e, fmax(fabs(got[k] - want[k]), fabs(gotg[k] - want[k])) / omega);
+                worst[ai] = fmax(worst[ai], e);
+                const double tol = theta >= 1e-3 ? 1e-4 : 1e-3;
+                if (!(e <= tol)) harness_fail(__FILE__, __LINE__, "lmax %d theta %.0e d %g: error/omega %.3g > %.0e",
+                                              lmax, theta, d, e, tol);
+            }
+        harness_note("lmax %d error/omega over d = 1, 10, 100: theta 1e-3 %.1e, 1e-4 %.1e, 1e-5 %.1e (tol 1e-4, 1e-3, 1e-3)",
+                     lmax, worst[0], worst[1], worst[2]);
+        shl_ctx_destroy(ctx);
+    }
+}
+
 SHL_TEST(polygon_invariants)
 {
     shl_ctx *ctx;
