@@ -22,12 +22,11 @@ LDLIBS   += -lm -lpthread
 
 # SIMD batch kernels (simd/): the ISAs are the lines of simd/isa_list.h that $(CC)'s target keeps
 # (read with its preprocessor, so the C code and the build see the same list), each with its flags.
-# Every kernel text simd/<kernel>.h is compiled once per ISA into $(BUILD)/simd/<isa>/<kernel>.o,
+# Every kernel text simd/<kernel>_batch.h is compiled once per ISA into $(BUILD)/simd/<isa>/<kernel>_batch.o,
 # with simd/<isa>/helper.h included first and only that ISA's flags (e.g. -mavx2 -mfma);
 # src/dispatch.c picks a table at run time.
-SHL_ISA_PP   = $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=$(1)' simd/isa_list.h)
-SHL_ISAS    := $(call SHL_ISA_PP,name)
-SHL_KERNELS := poly_batch sphere_batch interp_batch lights_batch
+SHL_ISAS    := $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=name' simd/isa_list.h)
+SHL_KERNELS := $(patsubst simd/%.h,%,$(wildcard simd/*_batch.h))
 ifeq ($(filter scalar,$(SHL_ISAS)),)
   $(error Makefile: '$(CC) -E simd/isa_list.h' lists no scalar ISA (got '$(SHL_ISAS)'))
 endif

@@ -7,8 +7,8 @@
  * preferred by the default choice (shl_ctx_create).  Consumers define SHL_ISA
  * and include this file (no include guard):
  *   - the Makefile preprocesses it with $(CC) to get the ISAs and their flags,
- *     and compiles every kernel text (simd/poly_batch.h, sphere_batch.h,
- *     interp_batch.h, lights_batch.h) once per ISA, with the helper included;
+ *     and compiles every kernel text simd/<kernel>_batch.h once per ISA, with the
+ *     helper included first;
  *   - src/dispatch.c declares the kernels and builds the table of each ISA;
  *   - tests/isa_ctx.h loops the SIMD tests over them. */
 SHL_ISA(scalar, "", 1)
