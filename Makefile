@@ -20,28 +20,24 @@ ifeq ($(SANITIZE),thread)
 endif
 LDLIBS   += -lm -lpthread
 
-# SIMD batch kernels (simd/): the kernel texts simd/poly_batch.h, simd/sphere_batch.h and
-# simd/lights_batch.h compiled once per ISA, simd/interp_batch.h once per vector ISA (the scalar table
-# interpolates with the reference, src/interp_kernel.h).
-# Only the AVX2 object gets -mavx2 -mfma; src/dispatch.c picks a kernel at run time.
-SHL_ARCH := $(shell $(CC) -dumpmachine)
-SIMD_SRC := simd/scalar/poly_batch_scalar.c simd/scalar/sphere_batch_scalar.c simd/scalar/lights_batch_scalar.c
-SIMD_DEFS :=
-ifneq ($(filter x86_64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/avx2/poly_batch_avx2.c simd/avx2/sphere_batch_avx2.c simd/avx2/interp_batch_avx2.c \
-               simd/avx2/lights_batch_avx2.c
-  SIMD_DEFS += -DSHL_HAVE_AVX2
+# SIMD batch kernels (simd/): the ISAs are the lines of simd/isa_list.h that $(CC)'s target keeps
+# (read with its preprocessor, so the C code and the build see the same list), each with its flags.
+# Every kernel text simd/<kernel>_batch.h is compiled once per ISA into $(BUILD)/simd/<isa>/<kernel>_batch.o,
+# with simd/<isa>/helper.h included first and only that ISA's flags (e.g. -mavx2 -mfma);
+# src/dispatch.c picks a table at run time.
+SHL_ISAS    := $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=name' simd/isa_list.h)
+SHL_KERNELS := $(patsubst simd/%.h,%,$(wildcard simd/*_batch.h))
+ifeq ($(filter scalar,$(SHL_ISAS)),)
+  $(error Makefile: '$(CC) -E simd/isa_list.h' lists no scalar ISA (got '$(SHL_ISAS)'))
 endif
-ifneq ($(filter aarch64%,$(SHL_ARCH)),)
-  SIMD_SRC  += simd/neon/poly_batch_neon.c simd/neon/sphere_batch_neon.c simd/neon/interp_batch_neon.c \
-               simd/neon/lights_batch_neon.c
-  SIMD_DEFS += -DSHL_HAVE_NEON
-endif
+# $(call isa_flags,ISA): the flags column of ISA's line, without its quotes.
+isa_flags = $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=name flags' simd/isa_list.h | sed -n 's/^$(1) "\(.*\)"$$/\1/p')
+SIMD_OBJ := $(foreach i,$(SHL_ISAS),$(SHL_KERNELS:%=simd/$(i)/%.o))
 
-LIB_SRC  := $(wildcard src/*.c) $(SIMD_SRC)
-LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
+LIB_SRC  := $(wildcard src/*.c)
+LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(SIMD_OBJ:%=$(BUILD)/%)
 # The test build links a second copy of the objects with allocation hooks enabled.
-TLIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/thooks/%.o)
+TLIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/thooks/%.o) $(SIMD_OBJ:%=$(BUILD)/thooks/%)
 TEST_SRC := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/bench_*.c) bench/demo.c
@@ -75,8 +71,16 @@ $(BUILD)/thooks/%.o: %.c $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -DSHL_ALLOC_HOOKS -c $< -o $@
 
-$(BUILD)/simd/avx2/%.o $(BUILD)/thooks/simd/avx2/%.o: CFLAGS_ALL += -mavx2 -mfma
-$(BUILD)/src/dispatch.o $(BUILD)/thooks/src/dispatch.o: CFLAGS_ALL += $(SIMD_DEFS) \
+# $(call isa_rules,ISA,OUT,EXTRA): the kernels of ISA into OUT/simd/ISA/, compiled with EXTRA.
+define isa_rules
+$(2)/simd/$(1)/%.o: simd/%.h $$(HDRS)
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(CFLAGS_ALL) $(3) $$(SHL_ISA_FLAGS_$(1)) -include simd/$(1)/helper.h -x c -c $$< -o $$@
+endef
+$(foreach i,$(SHL_ISAS),$(eval SHL_ISA_FLAGS_$(i) := $(call isa_flags,$(i))) \
+  $(eval $(call isa_rules,$(i),$(BUILD),)) $(eval $(call isa_rules,$(i),$(BUILD)/thooks,-DSHL_ALLOC_HOOKS)))
+
+$(BUILD)/src/dispatch.o $(BUILD)/thooks/src/dispatch.o: CFLAGS_ALL += \
   -DSHL_BUILD_CFLAGS="\"$(strip $(CSTD) $(OPT) $(CFLAGS) $(if $(filter-out 0,$(SANITIZE)),SANITIZE=$(SANITIZE)))\""
 
 $(STATIC): $(LIB_OBJ)

@@ -69,6 +69,11 @@ typedef struct shl_ctx shl_ctx;
 /** Create a context for bands 0..lmax (0 <= lmax <= SHL_LMAX_MAX).
  *  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create(int lmax, shl_ctx **out);
+/** As shl_ctx_create, with the batch kernels of the instruction set named isa
+ *  ("scalar", "avx2", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
+ *  isa NULL: SHL_ENULL; not compiled in or not supported by this CPU and OS:
+ *  SHL_EDOMAIN ("scalar" always succeeds).  On failure *out = NULL (if out != NULL). */
+int shl_ctx_create_isa(int lmax, const char *isa, shl_ctx **out);
 /** Destroy a context (NULL is accepted and ignored). */
 void shl_ctx_destroy(shl_ctx *ctx);
 /** Highest band of the context, or SHL_ENULL. */
@@ -693,7 +698,8 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
  * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
  * Chosen at shl_ctx_create: the best one compiled in and supported, unless the
  * environment variable SHLIGHT_ISA names another compiled-in, supported one
- * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.
+ * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.  Or
+ * given explicitly to shl_ctx_create_isa.
  */
 const char *shl_ctx_isa(const shl_ctx *ctx);
 /** Build description: version, compiler, flags, batch ISAs compiled in (never NULL). */

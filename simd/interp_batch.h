@@ -6,20 +6,28 @@
  * widened to double as they are loaded and the sums run in double FMAs, as in
  * the reference (float sums, measured 1.3-2x faster for Hermite, lost the
  * reference's guarantees: see README "Grid interpolation").  Written once
- * with the verbs of <isa>/helper.h and compiled for the vector ISAs only
- * (simd/<isa>/interp_batch_<isa>.c): the scalar table runs the readable
- * double reference, src/interp_kernel.h, whose formulas and comments this
- * file follows line by line.
+ * with the verbs of <isa>/helper.h and compiled once per ISA of
+ * simd/isa_list.h (Makefile); for helpers without double verbs (SHL_VDLEN
+ * undefined: scalar) it forwards to the readable double reference,
+ * src/interp_kernel.h, whose formulas and comments this file follows line by
+ * line.
  *
  * Blocks: a row of n >= VL coefficients is covered by blocks at k = 0, VL, ...
  * and a last block at n - VL, which overlaps the previous one and rewrites the
  * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient) run
  * the reference: a zero-padded copy measured 4-8x slower than it
  * (bench/bench_interp.c, lmax 0). */
-#include "batch.h"
+#include "kernel_api.h"
 
-#define VL SHL_VDLEN
 #define ISA(name) SHL_ISA_SUFFIX(name)
+
+#ifndef SHL_VDLEN
+void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+{
+    shl__interp_ref_f(data, method, nc, s, out);
+}
+#else
+#define VL SHL_VDLEN
 
 /* The point's weights (shl__interp_point), broadcast. */
 typedef struct {
@@ -120,3 +128,4 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
     else
         hermite(f, &W, nc, out);
 }
+#endif

@@ -1,10 +1,10 @@
 /* Light-set accumulation (src/lights_batch.c, Wu 2020 Alg. 1 line 7: the
  * lights add linearly): y[k] += s x[k] over a point's row of one light's
  * unit-radiance results, x and y distinct.  Vectorized along the row; written
- * once with the verbs of <isa>/helper.h and compiled once per ISA
- * (simd/<isa>/lights_batch_<isa>.c).  Every point's row starts at k = 0, so a
+ * once with the verbs of <isa>/helper.h and compiled once per ISA of
+ * simd/isa_list.h (Makefile).  Every point's row starts at k = 0, so a
  * point's result does not depend on the batch it is in. */
-#include "batch.h"
+#include "kernel_api.h"
 
 #define VL SHL_VLEN
 #define ISA(name) SHL_ISA_SUFFIX(name)

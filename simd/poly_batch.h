@@ -2,7 +2,7 @@
  * (Wu et al. 2020) for many shading points against one polygon, vectorized
  * ACROSS POINTS: each lane of a vector is one point, and every lane runs the
  * same recurrence.  Written once with the verbs of <isa>/helper.h and compiled
- * once per ISA (simd/<isa>/poly_batch_<isa>.c); with the scalar helper it is
+ * once per ISA of simd/isa_list.h (Makefile); with the scalar helper it is
  * plain C.  The recurrence is that of src/polygon_zh.h (see its comments),
  * reorganized for registers: for each lobe and edge the band loop runs to the
  * end with the edge's state in registers; the per-band sums over edges
@@ -11,7 +11,7 @@
  * and every lane multiplies its result by the sign of its own signed solid
  * angle (reversing the order negates every boundary term and S_0, Eq. 24-29),
  * so points that see different sides need no reordering. */
-#include "batch.h"
+#include "kernel_api.h"
 #include <float.h>
 #include <math.h>
 #include <stddef.h>

@@ -8,9 +8,9 @@
  * and its tangential gradient by the N_l^m recurrence of shl__sh_eval_grad
  * (same file, which derives it), and L_lm = w_l Y_lm(u) (Eq. 15) with
  * d L_lm/dx = -k_alpha w_l' Y_lm u - (w_l / d) (I - u u^T) grad Y_lm.
- * Written once with the verbs of <isa>/helper.h, compiled once per ISA
- * (simd/<isa>/sphere_batch_<isa>.c); with the scalar helper it is plain C. */
-#include "batch.h"
+ * Written once with the verbs of <isa>/helper.h, compiled once per ISA of
+ * simd/isa_list.h (Makefile); with the scalar helper it is plain C. */
+#include "kernel_api.h"
 #include <math.h>
 #include <stdint.h>
 

@@ -33,18 +33,33 @@ int shl__check_finite_f(const float *v, int count)
     return SHL_OK;
 }
 
-int shl_ctx_create(int lmax, shl_ctx **out)
+/* A context with the kernels of isa (NULL: unknown or unsupported, SHL_EDOMAIN). */
+static int ctx_create(int lmax, const shl__isa *isa, shl_ctx **out)
 {
-    if (!out) return SHL_ENULL;
-    *out = NULL; /* on every failure below (the exception in shlight.h) */
     if (lmax < 0 || lmax > SHL_LMAX_MAX) return SHL_ELMAX;
+    if (!isa) return SHL_EDOMAIN;
     shl_ctx *ctx = shl__calloc(1, sizeof *ctx);
     if (!ctx) return SHL_ENOMEM;
     ctx->lmax = lmax;
     ctx->nc = SHL_NCOEFFS(lmax);
-    ctx->isa = shl__isa_select();
+    ctx->isa = isa;
     *out = ctx;
     return SHL_OK;
+}
+
+int shl_ctx_create(int lmax, shl_ctx **out)
+{
+    if (!out) return SHL_ENULL;
+    *out = NULL; /* on every failure (the exception in shlight.h) */
+    return ctx_create(lmax, shl__isa_select(), out);
+}
+
+int shl_ctx_create_isa(int lmax, const char *isa, shl_ctx **out)
+{
+    if (!out) return SHL_ENULL;
+    *out = NULL; /* on every failure (the exception in shlight.h) */
+    if (!isa) return SHL_ENULL;
+    return ctx_create(lmax, shl__isa_find(isa), out);
 }
 
 void shl_ctx_destroy(shl_ctx *ctx) { shl__free(ctx); }

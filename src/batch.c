@@ -3,7 +3,6 @@
  * context's SIMD kernel (simd/poly_batch.h) over all points, and the scalar path
  * for the rare points its float geometry cannot resolve.  Light sets
  * (src/lights_batch.c) run the same two steps per polygon. */
-#include "../simd/batch.h"
 #include "parallel.h"
 #include "polygon.h"
 #include <float.h>

@@ -1,13 +1,12 @@
-/* Runtime choice of the batch kernels (simd/).  The Makefile compiles the
- * AVX2 kernel on x86-64 (SHL_HAVE_AVX2) and the NEON kernel on AArch64
- * (SHL_HAVE_NEON); the scalar kernel always.  Each context records its table
- * at creation; the CPU check and the float lobe tables are done once
- * (pthread_once). */
-#include "../simd/batch.h"
+/* Run-time choice of the batch kernels (simd/).  The ISAs are the lines of
+ * simd/isa_list.h that the compiler's target keeps (the Makefile compiles the
+ * same list); each context records its table at creation.  The CPU checks run
+ * once (pthread_once). */
+#include "internal.h"
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(SHL_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__))
+#if defined(__x86_64__)
 #include <cpuid.h>
 #endif
 
@@ -19,63 +18,11 @@
 #else
 #define SHL_COMPILER "unknown"
 #endif
-#ifdef SHL_HAVE_AVX2
-#define SHL_ISAS_AVX2 " avx2 (-mavx2 -mfma)"
-#else
-#define SHL_ISAS_AVX2 ""
-#endif
-#ifdef SHL_HAVE_NEON
-#define SHL_ISAS_NEON " neon"
-#else
-#define SHL_ISAS_NEON ""
-#endif
 
-float shl__zh_dir_f[SHL__ZH_NDIR][3];
-float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE];
-float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE];
-
-const shl__isa shl__isa_scalar = {
-    .name = "scalar",
-    .vlen = 1,
-    .poly_work_bytes = shl__poly_work_bytes_scalar,
-    .poly_batch = shl__poly_batch_scalar,
-    .sphere_work_bytes = shl__sphere_work_bytes_scalar,
-    .sphere_batch = shl__sphere_batch_scalar,
-    .interp_f = shl__interp_ref_f,
-    .accumulate = shl__accumulate_scalar,
-};
-#ifdef SHL_HAVE_AVX2
-const shl__isa shl__isa_avx2 = {
-    .name = "avx2",
-    .vlen = 8,
-    .poly_work_bytes = shl__poly_work_bytes_avx2,
-    .poly_batch = shl__poly_batch_avx2,
-    .sphere_work_bytes = shl__sphere_work_bytes_avx2,
-    .sphere_batch = shl__sphere_batch_avx2,
-    .interp_f = shl__interp_f_avx2,
-    .accumulate = shl__accumulate_avx2,
-};
-#endif
-#ifdef SHL_HAVE_NEON
-const shl__isa shl__isa_neon = {
-    .name = "neon",
-    .vlen = 4,
-    .poly_work_bytes = shl__poly_work_bytes_neon,
-    .poly_batch = shl__poly_batch_neon,
-    .sphere_work_bytes = shl__sphere_work_bytes_neon,
-    .sphere_batch = shl__sphere_batch_neon,
-    .interp_f = shl__interp_f_neon,
-    .accumulate = shl__accumulate_neon,
-};
-#endif
-
-static pthread_once_t init_once = PTHREAD_ONCE_INIT;
-static int cpu_avx2; /* written once under init_once */
-
-#if defined(SHL_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__))
+#if defined(__x86_64__)
 /* AVX2 and FMA usable: CPUID.1:ECX reports FMA (bit 12), OSXSAVE (27) and AVX (28),
  * XGETBV(0) shows the OS saves XMM and YMM state (bits 1, 2), CPUID.7.0:EBX reports AVX2 (5). */
-static int detect_avx2(void)
+static int shl__cpu_avx2(void)
 {
     unsigned a, b, c, d;
     if (!__get_cpuid(1, &a, &b, &c, &d)) return 0;
@@ -88,47 +35,68 @@ static int detect_avx2(void)
     __cpuid_count(7, 0, a, b, c, d);
     return (b >> 5) & 1;
 }
-#else
-static int detect_avx2(void) { return 0; }
 #endif
+
+#define SHL_ISA(name, flags, cpu) SHL__DECLARE_KERNELS(name)
+#include "../simd/isa_list.h"
+#undef SHL_ISA
+
+static const shl__isa isas[] = {
+#define SHL_ISA(isa, flags, cpu)                                                                       \
+    {                                                                                                  \
+        .name = #isa,                                                                                  \
+        .poly_work_bytes = shl__poly_work_bytes_##isa,                                                 \
+        .poly_batch = shl__poly_batch_##isa,                                                           \
+        .sphere_work_bytes = shl__sphere_work_bytes_##isa,                                             \
+        .sphere_batch = shl__sphere_batch_##isa,                                                       \
+        .interp_f = shl__interp_f_##isa,                                                               \
+        .accumulate = shl__accumulate_##isa,                                                           \
+    },
+#include "../simd/isa_list.h"
+#undef SHL_ISA
+};
+enum { NISA = sizeof isas / sizeof isas[0] };
+
+static pthread_once_t init_once = PTHREAD_ONCE_INIT;
+static int supported[NISA]; /* written once under init_once */
 
 static void init(void)
 {
-    cpu_avx2 = detect_avx2();
-    for (int d = 0; d < SHL__ZH_NDIR; ++d)
-        for (int k = 0; k < 3; ++k) shl__zh_dir_f[d][k] = (float)shl__zh_dir[d][k];
-    for (int i = 0; i < SHL__ZH_EVEN_SIZE; ++i) shl__zh_even_w_f[i] = (float)shl__zh_even_w[i];
-    for (int i = 0; i < SHL__ZH_ODD_SIZE; ++i) shl__zh_odd_w_f[i] = (float)shl__zh_odd_w[i];
+    int i = 0;
+#define SHL_ISA(name, flags, cpu) supported[i++] = (cpu) != 0;
+#include "../simd/isa_list.h"
+#undef SHL_ISA
 }
 
 const shl__isa *shl__isa_find(const char *name)
 {
     pthread_once(&init_once, init);
-    if (!strcmp(name, "scalar")) return &shl__isa_scalar;
-#ifdef SHL_HAVE_AVX2
-    if (!strcmp(name, "avx2") && cpu_avx2) return &shl__isa_avx2;
-#endif
-#ifdef SHL_HAVE_NEON
-    if (!strcmp(name, "neon")) return &shl__isa_neon;
-#endif
+    for (int i = 0; i < NISA; ++i)
+        if (supported[i] && !strcmp(name, isas[i].name)) return &isas[i];
     return NULL;
 }
 
-/* Best supported table, unless SHLIGHT_ISA names a compiled-in one this CPU
- * supports; any other value (unknown, not compiled in, unsupported) is ignored. */
+/* The last supported line of simd/isa_list.h, unless SHLIGHT_ISA names a
+ * compiled-in one this CPU supports; any other value (unknown, not compiled
+ * in, unsupported) is ignored. */
 const shl__isa *shl__isa_select(void)
 {
     const char *want = getenv("SHLIGHT_ISA");
     const shl__isa *isa = want ? shl__isa_find(want) : NULL;
     if (isa) return isa;
-    if ((isa = shl__isa_find("avx2")) || (isa = shl__isa_find("neon"))) return isa;
-    return &shl__isa_scalar;
+    pthread_once(&init_once, init);
+    for (int i = NISA - 1; i > 0; --i)
+        if (supported[i]) return &isas[i];
+    return &isas[0];
 }
 
 const char *shl_ctx_isa(const shl_ctx *ctx) { return ctx ? ctx->isa->name : ""; }
 
 const char *shl_build_info(void)
 {
-    return "shlight " SHL_VERSION_STRING "; compiler: " SHL_COMPILER "; flags: " SHL_BUILD_CFLAGS
-           "; batch ISAs: scalar" SHL_ISAS_AVX2 SHL_ISAS_NEON;
+    return "shlight " SHL_VERSION_STRING "; compiler: " SHL_COMPILER "; flags: " SHL_BUILD_CFLAGS "; batch ISAs:"
+#define SHL_ISA(name, flags, cpu) " " #name " (" flags ")"
+#include "../simd/isa_list.h"
+#undef SHL_ISA
+        ;
 }

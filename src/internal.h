@@ -2,6 +2,7 @@
 #ifndef SHL_INTERNAL_H
 #define SHL_INTERNAL_H
 
+#include "../simd/kernel_api.h" /* shl__isa, shl__batch_poly: the interface to simd/ */
 #include "shlight.h"
 #include <limits.h>
 #include <math.h>
@@ -16,7 +17,6 @@
 #define M_SQRT2 1.41421356237309504880
 #endif
 
-typedef struct shl__isa shl__isa; /* batch kernels of one instruction set (simd/batch.h) */
 
 struct shl_ctx {
     int lmax;
@@ -26,6 +26,27 @@ struct shl_ctx {
 
 /* The batch kernels for this CPU, or those forced by SHLIGHT_ISA (dispatch.c). */
 const shl__isa *shl__isa_select(void);
+/* The table of the ISA called name if compiled in and supported by this CPU, else NULL (dispatch.c). */
+const shl__isa *shl__isa_find(const char *name);
+
+/* src/batch.c: the polygon verts[0..3n) (finite doubles) prepared for the
+ * kernel; the kernel over npts points followed by the scalar path for the
+ * points its float geometry cannot resolve (zeros when P->n == 0); and the
+ * scalar float path alone at one point (geometry in double, as shl_polygon_grad_f).
+ * work: poly_work_bytes(lmax, grad != NULL) bytes. */
+void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P);
+void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const double *verts, int n, int npts,
+                          const float *pts, float *coeffs, float *grad, void *work);
+void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const float *pt, float *coeffs,
+                           float *grad);
+
+/* src/sphere_batch.c: the sphere (finite centre, finite radius > 0) at npts
+ * points, outputs as shl_sphere_batch_f; the kernel where its unscaled double
+ * set-up stays in range, else the scalar float path per point.
+ * work: sphere_work_bytes(lmax, grad != NULL) bytes. */
+void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double radius, int npts, const float *pts,
+                            float *coeffs, float *grad, void *work);
+
 
 /* Allocation hooks: every library allocation goes through these so that
  * tests can inject failures; not part of the public API. */

@@ -1,7 +1,6 @@
 /* Interpolation of grid coefficients at arbitrary points (Wu et al. 2020,
  * Alg. 1 lines 9-16): trilinear, first-order Taylor blended by inverse
  * distance (Annen et al. 2004, Eq. 14-16), tricubic Hermite (Wu 2020 Alg. 4). */
-#include "../simd/batch.h"
 #include "grid.h"
 #include "parallel.h"
 #include <limits.h>

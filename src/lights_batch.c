@@ -1,14 +1,13 @@
 /* Light sets at many shading points in float, through the SIMD kernels: for
  * each light, the points it reaches are gathered (a one-sided polygon reaches
  * the points in front of it, by the double test of shl_lights_eval), run through
- * the polygon or sphere batch kernel (simd/batch.h), and added, times the
+ * the polygon or sphere batch kernel (simd/kernel_api.h), and added, times the
  * light's rgb, into their outputs.  The ZH -> SH reconstruction is not shared
  * across lights as in shl__lights_eval: in the kernel it is 13% of the time at
  * lmax 8 (bench/RESULTS.md sec. 4), the per-light SH accumulation it would
  * replace costs about as much as the lobe-domain one.  Threads take whole
  * blocks of SHL__LIGHTS_BLOCK points, so a point's result never depends on the
  * thread count.  The double batch shl_lights_eval_batch is here too. */
-#include "../simd/batch.h"
 #include "lights.h"
 #include "parallel.h"
 #include <math.h>

@@ -1,7 +1,6 @@
 /* Batched spherical light: argument checks, then the context's SIMD kernel
  * (simd/sphere_batch.h) over all points.  Light sets (src/lights_batch.c)
  * share shl__batch_sphere_eval. */
-#include "../simd/batch.h"
 #include "parallel.h"
 #include "sh_ops.h"
 #include <math.h>

@@ -25,5 +25,9 @@ extern const double shl__zh_even_w[SHL__ZH_EVEN_SIZE];
 extern const double shl__zh_odd_w[SHL__ZH_ODD_SIZE];
 /* 2-norm condition number of band l's matrix Y_lm(d_i), i < 2l+1. */
 extern const double shl__zh_cond[SHL_LMAX_MAX + 1];
+/* Float copies, (float) of the doubles above (generated too), for the float kernels. */
+extern const float shl__zh_dir_f[SHL__ZH_NDIR][3];
+extern const float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE];
+extern const float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE];
 
 #endif

@@ -1,11 +1,11 @@
 /* Batched SIMD kernels (shl_polygon_batch_f) against the scalar double
  * reference (shl_polygon, shl_polygon_grad on the float-rounded input) and,
  * lane by lane, against the scalar float path (shl_polygon_f,
- * shl_polygon_grad_f), for every ISA this machine runs (contexts created with
- * SHLIGHT_ISA set).  Errors: coefficients relative to |L00| of the reference,
+ * shl_polygon_grad_f), for every ISA this machine runs (contexts from
+ * shl_ctx_create_isa).  Errors: coefficients relative to |L00| of the reference,
  * gradients relative to the largest reference gradient of the point. */
 #include "geom.h"
-#include "../simd/batch.h"
+#include "../src/internal.h"
 #include "harness.h"
 #include "isa_ctx.h"
 #include "ref_quad.h"
@@ -355,9 +355,8 @@ SHL_TEST(simd_winding_per_lane)
 
 SHL_TEST(simd_dispatch)
 {
-    const shl__isa *best = shl__isa_find("avx2");
-    if (!best) best = shl__isa_find("neon");
-    if (!best) best = shl__isa_find("scalar");
+    const shl__isa *best = NULL; /* the default: the last line of simd/isa_list.h this CPU runs */
+    for (int i = NISA - 1; i >= 0 && !best; --i) best = shl__isa_find(isas[i]);
     CHECK(best != NULL);
     shl_ctx *ctx = NULL;
     const char *old = getenv("SHLIGHT_ISA");
@@ -377,6 +376,23 @@ SHL_TEST(simd_dispatch)
     ctx = isa_ctx("scalar", 2);
     CHECK(ctx != NULL);
     shl_ctx_destroy(ctx);
+    /* shl_ctx_create_isa: a name not compiled in or not supported, wrong case, empty: SHL_EDOMAIN;
+     * NULL name or out: SHL_ENULL; bad lmax: SHL_ELMAX; *out = NULL on every failure. */
+    const char *bad[4] = {"bogus", "AVX2", "", shl__isa_find("avx2") ? "sse9" : "avx2"};
+    for (int i = 0; i < 4; ++i) {
+        ctx = (shl_ctx *)&ctx;
+        CHECK(shl_ctx_create_isa(2, bad[i], &ctx) == SHL_EDOMAIN && ctx == NULL);
+    }
+    ctx = (shl_ctx *)&ctx;
+    CHECK(shl_ctx_create_isa(2, NULL, &ctx) == SHL_ENULL && ctx == NULL);
+    CHECK(shl_ctx_create_isa(2, "scalar", NULL) == SHL_ENULL);
+    ctx = (shl_ctx *)&ctx;
+    CHECK(shl_ctx_create_isa(SHL_LMAX_MAX + 1, "scalar", &ctx) == SHL_ELMAX && ctx == NULL);
+    setenv("SHLIGHT_ISA", "scalar", 1); /* the explicit name wins over the environment */
+    CHECK(shl_ctx_create_isa(2, best->name, &ctx) == SHL_OK && !strcmp(shl_ctx_isa(ctx), best->name));
+    shl_ctx_destroy(ctx);
+    if (old) setenv("SHLIGHT_ISA", saved, 1);
+    else unsetenv("SHLIGHT_ISA");
     CHECK(!strcmp(shl_ctx_isa(NULL), ""));
     const char *info = shl_build_info();
     CHECK(info && strstr(info, "scalar") && strstr(info, SHL_VERSION_STRING));
@@ -555,4 +571,18 @@ SHL_TEST(simd_float_small_lights)
     harness_note("%d ISAs, lmax %d, error/omega over d = 1, 10, 100: theta 1e-3 %.1e, 1e-4 %.1e, 1e-5 %.1e "
                  "(tol 1e-4, 1e-3, 1e-3); near points worst error/tol %.2f",
                  isa_count, LM, worst[0], worst[1], worst[2], worst_near);
+
+/* The generated float lobe tables (src/zh_tables.c, tools/gen_lobes.c) are exactly
+ * the doubles rounded to float: the literals are printed with 9 significant digits,
+ * enough to read back every float exactly, so no tolerance. */
+SHL_TEST(simd_lobe_tables_float_copies)
+{
+    int differ = 0;
+    for (int d = 0; d < SHL__ZH_NDIR; ++d)
+        for (int k = 0; k < 3; ++k) differ += shl__zh_dir_f[d][k] != (float)shl__zh_dir[d][k];
+    for (int i = 0; i < SHL__ZH_EVEN_SIZE; ++i) differ += shl__zh_even_w_f[i] != (float)shl__zh_even_w[i];
+    for (int i = 0; i < SHL__ZH_ODD_SIZE; ++i) differ += shl__zh_odd_w_f[i] != (float)shl__zh_odd_w[i];
+    CHECK(differ == 0);
+    harness_note("%d of %d float entries differ from (float) of the double table", differ,
+                 3 * SHL__ZH_NDIR + SHL__ZH_EVEN_SIZE + SHL__ZH_ODD_SIZE);
 }

@@ -1,7 +1,7 @@
 /* Scalar fallback of the vector verbs: one float lane, so the kernel texts of
  * simd/poly_batch.h and simd/sphere_batch.h compile as plain C on every target
- * (SHTns style).  simd/interp_batch.h needs the double verbs (vd_*) of the vector
- * helpers only: the scalar table interpolates with src/interp_kernel.h. */
+ * (SHTns style).  No double verbs (vd_*, SHL_VDLEN): simd/interp_batch.h then
+ * forwards to the double reference of src/interp_kernel.h. */
 #ifndef SHL_SIMD_HELPER_H
 #define SHL_SIMD_HELPER_H
 

@@ -1,5 +1,5 @@
 /* libFuzzer target: shl_polygon_batch_f (SIMD batches), every ISA this machine
- * runs (contexts created with SHLIGHT_ISA=scalar and with the default ISA).
+ * runs (contexts of shl_ctx_create_isa("scalar") and of the default ISA).
  *
  * Input: lmax byte, flags byte (bit 0: gradients, bit 1: a NaN point, bit 2:
  * scalar ISA, bit 3: allocation failure, bits 4-7: NULL / bad npts), polygon
@@ -29,9 +29,8 @@ static shl_ctx *ctx_isa[2][SHL_LMAX_MAX + 1];
 static const shl_ctx *batch_ctx(int scalar, int lmax)
 {
     if (!ctx_isa[scalar][lmax]) {
-        if (scalar) setenv("SHLIGHT_ISA", "scalar", 1);
-        const int st = shl_ctx_create(lmax, &ctx_isa[scalar][lmax]);
-        if (scalar) unsetenv("SHLIGHT_ISA");
+        const int st = scalar ? shl_ctx_create_isa(lmax, "scalar", &ctx_isa[scalar][lmax])
+                              : shl_ctx_create(lmax, &ctx_isa[scalar][lmax]);
         if (st != SHL_OK) abort();
     }
     return ctx_isa[scalar][lmax];

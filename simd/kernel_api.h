@@ -1,12 +1,14 @@
-/* Batched kernels: the polygon prepared once per call (src/batch.c), the
- * per-ISA kernel table (src/dispatch.c), shared with the kernels compiled
- * once per ISA from simd/poly_batch.h, simd/sphere_batch.h, simd/interp_batch.h
- * and simd/lights_batch.h. */
-#ifndef SHL_SIMD_BATCH_H
-#define SHL_SIMD_BATCH_H
+/* The interface between the library (src/) and the batch kernels (simd/): the
+ * data the kernels read, their signatures and the per-ISA table of them.  The
+ * kernel texts simd/poly_batch.h, simd/sphere_batch.h, simd/interp_batch.h and
+ * simd/lights_batch.h include only this header (and the ISA's helper, which the
+ * Makefile includes first); src/internal.h includes it for src/. */
+#ifndef SHL_SIMD_KERNEL_API_H
+#define SHL_SIMD_KERNEL_API_H
 
-#include "internal.h"
-#include "zh_tables.h"
+#include "../src/zh_tables.h"
+#include "shlight.h"
+#include <stddef.h>
 
 /* A polygon prepared for many shading points, in scaled units: every
  * coordinate (vertices and points) is multiplied by inv_scale, a power of two
@@ -53,29 +55,11 @@ typedef void (*shl__interp_fn)(const float *data, int method, int nc, const shl_
 typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double radius, int npts, const float *pts,
                                      float *coeffs, float *grad, void *work);
 
-/* src/batch.c: the polygon verts[0..3n) (finite doubles) prepared for the
- * kernel; the kernel over npts points followed by the scalar path for the
- * points its float geometry cannot resolve (zeros when P->n == 0); and the
- * scalar float path alone at one point (geometry in double, as shl_polygon_grad_f).
- * work: poly_work_bytes(lmax, grad != NULL) bytes. */
-void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P);
-void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const double *verts, int n, int npts,
-                          const float *pts, float *coeffs, float *grad, void *work);
-void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const float *pt, float *coeffs,
-                           float *grad);
-
-/* src/sphere_batch.c: the sphere (finite centre, finite radius > 0) at npts
- * points, outputs as shl_sphere_batch_f; the kernel where its unscaled double
- * set-up stays in range, else the scalar float path per point.
- * work: sphere_work_bytes(lmax, grad != NULL) bytes. */
-void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double radius, int npts, const float *pts,
-                            float *coeffs, float *grad, void *work);
-
-/* One table per instruction set, defined in src/dispatch.c (designated
- * initializers, one field per line). */
+/* The kernels of one instruction set; src/dispatch.c builds one per line of
+ * simd/isa_list.h. */
+typedef struct shl__isa shl__isa;
 struct shl__isa {
-    const char *name;  /* "scalar", "avx2", "neon" */
-    int vlen;          /* float lanes */
+    const char *name;  /* as in simd/isa_list.h: "scalar", "avx2", "neon" */
     size_t (*poly_work_bytes)(int lmax, int with_grad);
     shl__poly_batch_fn poly_batch;
     size_t (*sphere_work_bytes)(int lmax, int with_grad);
@@ -84,44 +68,21 @@ struct shl__isa {
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
 };
 
-/* Kernels of simd/poly_batch.h, one instance per ISA (simd/<isa>/). */
-#define SHL__DECLARE_POLY_BATCH(isa)                                                                    \
+/* The interpolation reference (src/interp.c, src/interp_kernel.h): the scalar
+ * instance of simd/interp_batch.h, and the others for rows shorter than a vector. */
+void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, double *out);
+
+/* The kernels of one ISA, each defined by its kernel text compiled with that
+ * ISA's helper (suffix _<isa>, SHL_ISA_SUFFIX); declared for every line of
+ * simd/isa_list.h by src/dispatch.c. */
+#define SHL__DECLARE_KERNELS(isa)                                                                      \
     size_t shl__poly_work_bytes_##isa(int lmax, int with_grad);                                        \
     void shl__poly_batch_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,      \
-                               float *coeffs, float *grad, void *work);
-SHL__DECLARE_POLY_BATCH(scalar)
-SHL__DECLARE_POLY_BATCH(avx2)
-SHL__DECLARE_POLY_BATCH(neon)
-
-/* Kernels of simd/sphere_batch.h, one instance per ISA. */
-#define SHL__DECLARE_SPHERE_BATCH(isa)                                                                 \
+                               float *coeffs, float *grad, void *work);                                \
     size_t shl__sphere_work_bytes_##isa(int lmax, int with_grad);                                      \
     void shl__sphere_batch_##isa(int lmax, const double center[3], double radius, int npts, const float *pts, \
-                                 float *coeffs, float *grad, void *work);
-SHL__DECLARE_SPHERE_BATCH(scalar)
-SHL__DECLARE_SPHERE_BATCH(avx2)
-SHL__DECLARE_SPHERE_BATCH(neon)
-
-/* Light-set accumulation of simd/lights_batch.h, one instance per ISA. */
-void shl__accumulate_scalar(size_t n, float s, const float *x, float *y);
-void shl__accumulate_avx2(size_t n, float s, const float *x, float *y);
-void shl__accumulate_neon(size_t n, float s, const float *x, float *y);
-
-/* Interpolation: the reference (src/interp.c) and simd/interp_batch.h per vector ISA. */
-void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, double *out);
-void shl__interp_f_avx2(const float *data, int method, int nc, const shl__interp_point *s, double *out);
-void shl__interp_f_neon(const float *data, int method, int nc, const shl__interp_point *s, double *out);
-
-extern const shl__isa shl__isa_scalar;
-extern const shl__isa shl__isa_avx2;
-extern const shl__isa shl__isa_neon;
-
-/* Float copies of the lobe table (zh_tables.h), filled once by shl__isa_select(). */
-extern float shl__zh_dir_f[SHL__ZH_NDIR][3];
-extern float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE];
-extern float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE];
-
-/* The table named name if compiled in and supported by this CPU, else NULL (dispatch.c). */
-const shl__isa *shl__isa_find(const char *name);
+                                 float *coeffs, float *grad, void *work);                              \
+    void shl__interp_f_##isa(const float *data, int method, int nc, const shl__interp_point *s, double *out); \
+    void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);
 
 #endif

@@ -1,0 +1,20 @@
+/* The instruction sets of the batch kernels, written once.  Each line
+ *   SHL_ISA(name, "compiler flags", cpu_supports)
+ * names a helper header simd/<name>/helper.h (the vector verbs), the flags only
+ * that ISA's kernel objects get, and an expression, evaluated once at run time
+ * in src/dispatch.c, that is nonzero when this CPU and OS can run them.  The
+ * #if around a line is the target on which it is compiled in.  Later lines are
+ * preferred by the default choice (shl_ctx_create).  Consumers define SHL_ISA
+ * and include this file (no include guard):
+ *   - the Makefile preprocesses it with $(CC) to get the ISAs and their flags,
+ *     and compiles every kernel text simd/<kernel>_batch.h once per ISA, with the
+ *     helper included first;
+ *   - src/dispatch.c declares the kernels and builds the table of each ISA;
+ *   - tests/isa_ctx.h loops the SIMD tests over them. */
+SHL_ISA(scalar, "", 1)
+#if defined(__x86_64__)
+SHL_ISA(avx2, "-mavx2 -mfma", shl__cpu_avx2())
+#endif
+#if defined(__aarch64__)
+SHL_ISA(neon, "", 1) /* baseline on AArch64 */
+#endif
