@@ -571,6 +571,7 @@ SHL_TEST(simd_float_small_lights)
     harness_note("%d ISAs, lmax %d, error/omega over d = 1, 10, 100: theta 1e-3 %.1e, 1e-4 %.1e, 1e-5 %.1e "
                  "(tol 1e-4, 1e-3, 1e-3); near points worst error/tol %.2f",
                  isa_count, LM, worst[0], worst[1], worst[2], worst_near);
+}
 
 /* The generated float lobe tables (src/zh_tables.c, tools/gen_lobes.c) are exactly
  * the doubles rounded to float: the literals are printed with 9 significant digits,
