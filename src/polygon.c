@@ -158,6 +158,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     }
     const double a = fabs(height);
     double abs_total = 0.0, theta = 0.0, delta = 0.0, abs_delta = 0.0;
+    int foot_on_boundary = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         double ei[3], ej[3], edge[3], c[3];
@@ -170,6 +171,10 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         shl__cross3(ei, edge, c);
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double si = shl__norm3(ei), sj = shl__norm3(ej);
+        /* the foot on this edge or a vertex: its in-plane angle theta_i is +-pi or
+         * undefined (atan2(0, 0)), so the split omega_i = theta_i + (omega_i - theta_i)
+         * below does not hold; the direct sum has no such case */
+        foot_on_boundary |= (num == 0.0 && dot <= 0.0) || si == 0.0 || sj == 0.0;
         const double pair = dot >= 0.0 ? ri * rj + dot
                                        : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
         const double den = pair + a * (ri + rj) + a * a;
@@ -184,7 +189,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         abs_delta += fabs(dterm);
     }
     const double k = nearbyint(theta / (2.0 * M_PI));
-    if (2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
+    if (!foot_on_boundary && 2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
     return fabs(total);
 }
 

@@ -329,3 +329,44 @@ SHL_TEST(nearplane_closer)
     harness_note("lmax 14 max error/omega %.2e (tol 1e-12), solid angle %.2e (tol 1e-13)", worst, worst_sa);
     shl_ctx_destroy(ctx);
 }
+
+/* The foot of x exactly on an edge or a vertex (found by fuzz_batch: a triangle seen
+ * from 1 above the vertex (0, 0)): the in-plane angle of that edge is +-pi or
+ * undefined, so the foot-fan split omega_i = theta_i + (omega_i - theta_i) cannot be
+ * used and the direct fan sum must be (it was 0.546 instead of 1.025 sr).  Against
+ * the double-double Van Oosterom-Strackee sum; at these heights the direct sum has
+ * full relative accuracy (no O(1) terms cancel), so the sweep's 1e-13 holds. */
+SHL_TEST(nearplane_foot_on_boundary)
+{
+    static const double tri[9] = {0, 0, 0, 3, 0, 0, 0, 4, 0};
+    static const double sq[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    const double heights[4] = {1.0, 0.1, 1e-3, -0.5};
+    double worst = 0.0;
+    int cases = 0;
+    for (int shape = 0; shape < 2; ++shape) {
+        const double *v = shape == 0 ? tri : sq;
+        const int n = shape == 0 ? 3 : 4;
+        for (int i = 0; i < n; ++i) {
+            const double *a = v + 3 * i, *b = v + 3 * ((i + 1) % n);
+            for (int q = 0; q <= 4; ++q) { /* the vertex a (q = 0) and points a + q/4 (b - a): exact in binary */
+                for (int hk = 0; hk < 4; ++hk) {
+                    const double x[3] = {a[0] + 0.25 * q * (b[0] - a[0]), a[1] + 0.25 * q * (b[1] - a[1]), heights[hk]};
+                    double omega, c[SHL_NCOEFFS(0)];
+                    shl_ctx *ctx = NULL;
+                    CHECK(shl_ctx_create(0, &ctx) == SHL_OK);
+                    CHECK(shl_polygon_solid_angle(x, v, n, &omega) == SHL_OK);
+                    CHECK(shl_polygon(ctx, x, v, n, c) == SHL_OK);
+                    shl_ctx_destroy(ctx);
+                    const double want = ref_vos_dd(x, v, n);
+                    const double e = fmax(fabs(omega - want), fabs(c[0] * 2.0 * sqrt(M_PI) - want)) / want;
+                    worst = fmax(worst, e);
+                    ++cases;
+                    if (!(e <= 1e-13))
+                        harness_fail(__FILE__, __LINE__, "%s edge %d q %d h %g: omega %.17g L00 2 sqrt(pi) %.17g want %.17g",
+                                     shape ? "square" : "triangle", i, q, x[2], omega, c[0] * 2.0 * sqrt(M_PI), want);
+                }
+            }
+        }
+    }
+    harness_note("%d feet on edges and vertices: max rel error %.2e (tol 1e-13)", cases, worst);
+}
