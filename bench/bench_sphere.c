@@ -271,6 +271,66 @@ static void former_sh_eval(int lmax, double x, double y, double z, double *out)
     }
 }
 
+/* shl_sphere_grad before its fused kernel (commit b9d87c8): Y and its tangential
+ * gradient by the tabulated recurrences with the gradient formed per (l, m), then
+ * a second pass applying the cap weights and their derivatives.  Kept here only to
+ * measure the speed-up of the gradient path. */
+static void former_sphere_grad(int lmax, const double x[3], const double center[3], double radius, double *y,
+                               double *grad)
+{
+    const int nc = SHL_NCOEFFS(lmax);
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, x, center, radius);
+    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], q[SHL__SH_NTRI], sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1];
+    shl__cap_weights_d(lmax, g.t, g.s2, g.c, w, dw);
+    const double *u = g.u, ux = u[0], uy = u[1], z = u[2];
+    double cm = 1, sm = 0;
+    sc[0] = M_SQRT2, ss[0] = 0;
+    for (int m = 1; m <= lmax; ++m) {
+        const double c = cm * ux - sm * uy;
+        sm = cm * uy + sm * ux, cm = c, sc[m] = M_SQRT2 * cm, ss[m] = M_SQRT2 * sm;
+    }
+    q[0] = shl__sh_diag_d[0];
+    if (lmax > 0) q[1] = shl__sh_a_d[1] * z * q[0], q[2] = shl__sh_diag_d[1];
+    for (int l = 2; l <= lmax; ++l) {
+        const int t = l * (l + 1) / 2;
+        const double *q1 = q + t - l, *q2 = q + t - 2 * l + 1, *a = shl__sh_a_d + t, *b = shl__sh_b_d + t;
+        for (int m = 0; m < l - 1; ++m) q[t + m] = a[m] * (z * q1[m] - b[m] * q2[m]);
+        q[t + l - 1] = a[l - 1] * z * q1[l - 1], q[t + l] = shl__sh_diag_d[l];
+    }
+    for (int l = 0; l <= lmax; ++l) {
+        const int t = l * (l + 1) / 2, base = l * (l + 1);
+        const double *ql = q + t, *dz = shl__sh_dz_d + t, dn0 = l > 0 ? dz[0] * ql[1] : 0;
+        y[base] = ql[0];
+        grad[base] = -dn0 * z * ux, grad[nc + base] = -dn0 * z * uy, grad[2 * nc + base] = dn0 - dn0 * z * z;
+        for (int m = 1; m <= l; ++m) {
+            const double n = ql[m], dn = m < l ? dz[m] * ql[m + 1] : 0, nm = n * m;
+            y[base + m] = n * sc[m], y[base - m] = n * ss[m];
+            const double gp[3] = {nm * sc[m - 1], -nm * ss[m - 1], dn * sc[m]};
+            const double gn[3] = {nm * ss[m - 1], nm * sc[m - 1], dn * ss[m]};
+            const double rp = gp[0] * ux + gp[1] * uy + gp[2] * z, rn = gn[0] * ux + gn[1] * uy + gn[2] * z;
+            for (int k = 0; k < 3; ++k)
+                grad[k * nc + base + m] = gp[k] - rp * u[k], grad[k * nc + base - m] = gn[k] - rn * u[k];
+        }
+    }
+    for (int l = 0; l <= lmax; ++l)
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+            const double radial = g.k_alpha_s * dw[l] * y[k], tang = w[l] * g.inv_d_s;
+            for (int a = 0; a < 3; ++a)
+                grad[a * nc + k] = (-radial * u[a] - tang * grad[a * nc + k]) * g.grad_scale[0] * g.grad_scale[1];
+            y[k] *= w[l];
+        }
+}
+
+static void run_grad_former(void *p)
+{
+    job *j = p;
+    for (long i = 0; i < j->inner; ++i) {
+        former_sphere_grad(j->lmax, j->x[i % NPTS], j->center, j->radius, shbuf, gbuf);
+        bench_sink += gbuf[1];
+    }
+}
+
 static const plain_tab *cur_plain;
 
 static void run_plain(void *p)
@@ -359,18 +419,20 @@ static void setup(job *j, const shl_ctx *ctx)
  * so that other load on the machine hits both sides of each ratio alike. */
 #define NCMP 5
 #define NROUND 7
-enum { K_SHL, K_PLAIN, K_BASIS, K_FORMER, K_EVAL, NKIND };
+enum { K_SHL, K_PLAIN, K_BASIS, K_FORMER, K_EVAL, K_GRAD, K_GRAD_FORMER, K_SHL_F, K_GRAD_F, NKIND };
 
 static void compare_section(FILE *csv)
 {
     static const int lmaxs[NCMP] = {2, 5, 9, 14, 30};
-    static void (*const fns[NKIND])(void *) = {run_sphere, run_plain, run_basis_new, run_basis_former, run_eval_basis};
+    static void (*const fns[NKIND])(void *) = {run_sphere, run_plain, run_basis_new, run_basis_former, run_eval_basis,
+                                                       run_sphere_grad, run_grad_former, run_sphere_f, run_sphere_grad_f};
     static job jobs[NCMP];
     static plain_tab tabs[NCMP];
     static double t[NKIND][NCMP][NROUND], ref[SHL_NCOEFFS(SHL_LMAX_MAX)];
     shl_ctx *ctx[NCMP];
     long inner[NCMP][NKIND];
-    double agree[NCMP], agree_basis[NCMP];
+    double agree[NCMP], agree_basis[NCMP], agree_grad[NCMP];
+    static double gref[3 * SHL_NCOEFFS(SHL_LMAX_MAX)];
     for (int i = 0; i < NCMP; ++i) {
         shl_ctx_create(lmaxs[i], &ctx[i]);
         setup(&jobs[i], ctx[i]);
@@ -387,6 +449,13 @@ static void compare_section(FILE *csv)
             for (int k = 0; k < nc; ++k) worst_b = fmax(worst_b, fabs(shbuf[k] - ref[k]));
         }
         agree[i] = worst / big;
+        double gw = 0.0, gbig = 0.0; /* fused gradient kernel vs its former form */
+        for (int q = 0; q < NPTS; ++q) {
+            shl_sphere_grad(ctx[i], jobs[i].x[q], jobs[i].center, jobs[i].radius, shbuf, gbuf);
+            former_sphere_grad(lmaxs[i], jobs[i].x[q], jobs[i].center, jobs[i].radius, ref, gref);
+            for (int k = 0; k < 3 * nc; ++k) gw = fmax(gw, fabs(gbuf[k] - gref[k])), gbig = fmax(gbig, fabs(gref[k]));
+        }
+        agree_grad[i] = gw / gbig;
         agree_basis[i] = worst_b;
         for (int k = 0; k < NKIND; ++k) {
             cur_plain = &tabs[i];
@@ -432,6 +501,22 @@ static void compare_section(FILE *csv)
                     med[K_SHL] * 1e9, med[K_PLAIN] * 1e9, ratio, agree[i], med[K_BASIS] * 1e9, med[K_FORMER] * 1e9,
                     ratio_b, med[K_EVAL] * 1e9);
         shl_ctx_destroy(ctx[i]);
+    }
+    printf("\n### shl_sphere_grad / shl_sphere (same rounds)\n\n'former': shl_sphere_grad before its fused "
+           "kernel, kept in this file.  max|diff|: new vs former gradient, relative to max|grad|.\n\n");
+    printf("| lmax | shl_sphere ns | shl_sphere_grad ns | grad / coeff (range) | former grad ns | former / coeff | "
+           "former / new | max|diff| | float: grad_f / coeff_f (range) |\n|---|---|---|---|---|---|---|---|---|\n");
+    for (int i = 0; i < NCMP; ++i) {
+        double rg[NROUND], rf[NROUND], lo = 1e30, hi = 0.0, flo = 1e30, fhi = 0.0, med[NKIND];
+        for (int r = 0; r < NROUND; ++r) {
+            rg[r] = t[K_GRAD][i][r] / t[K_SHL][i][r], rf[r] = t[K_GRAD_F][i][r] / t[K_SHL_F][i][r];
+            lo = fmin(lo, rg[r]), hi = fmax(hi, rg[r]), flo = fmin(flo, rf[r]), fhi = fmax(fhi, rf[r]);
+        }
+        for (int k = 0; k < NKIND; ++k) med[k] = bench_median(t[k][i], NROUND);
+        printf("| %d | %.0f | %.0f | %.2f (%.2f-%.2f) | %.0f | %.2f | %.2f | %.1e | %.2f (%.2f-%.2f) |\n", lmaxs[i],
+               med[K_SHL] * 1e9, med[K_GRAD] * 1e9, bench_median(rg, NROUND), lo, hi, med[K_GRAD_FORMER] * 1e9,
+               med[K_GRAD_FORMER] / med[K_SHL], med[K_GRAD_FORMER] / med[K_GRAD], agree_grad[i],
+               bench_median(rf, NROUND), flo, fhi);
     }
     double worst = 0.0;
     for (int i = 0; i < NCMP; ++i) worst = fmax(worst, agree[i]);

@@ -78,7 +78,7 @@ void shl__sh_eval(int lmax, double x, double y, double z, double *out);
  * l (l+1) / 2 + m.  With N_l^m = K_lm P_l^m(z) / sin^m(theta): diag[m] = N_m^m;
  * N_l^m = a (z N_{l-1}^m - b N_{l-2}^m) (l >= m+2), N_{m+1}^m = a z N_m^m;
  * dN_l^m/dz = dz N_l^{m+1}; k15[l] = sqrt(4 pi / (2l+1)); Legendre polynomials
- * P_{l+1} = lega[l] c P_l - legb[l] P_{l-1}; capk[l] = 2 pi / (l (l+1)); one[l] = 1. */
+ * P_{l+1} = lega[l] c P_l - legb[l] P_{l-1}; capk[l] = 2 pi / (l (l+1)); one[l] = 1; mval[m] = m. */
 #define SHL__SH_NTRI ((SHL_LMAX_MAX + 1) * (SHL_LMAX_MAX + 2) / 2)
 extern const double shl__sh_diag_d[SHL_LMAX_MAX + 1], shl__sh_k15_d[SHL_LMAX_MAX + 1];
 extern const double shl__sh_a_d[SHL__SH_NTRI], shl__sh_b_d[SHL__SH_NTRI], shl__sh_dz_d[SHL__SH_NTRI];
@@ -88,6 +88,8 @@ extern const double shl__sh_lega_d[SHL_LMAX_MAX + 1], shl__sh_legb_d[SHL_LMAX_MA
 extern const float shl__sh_lega_f[SHL_LMAX_MAX + 1], shl__sh_legb_f[SHL_LMAX_MAX + 1], shl__sh_capk_f[SHL_LMAX_MAX + 1];
 extern const double shl__sh_one_d[SHL_LMAX_MAX + 1];
 extern const float shl__sh_one_f[SHL_LMAX_MAX + 1];
+extern const double shl__sh_mval_d[SHL_LMAX_MAX + 1];
+extern const float shl__sh_mval_f[SHL_LMAX_MAX + 1];
 
 /* Argument checks shared by the API entry points (api.c). */
 int shl__check_finite(const double *v, int count);

@@ -89,19 +89,6 @@ static inline void SUFFIX(band_y)(int l, int t, REAL z, REAL wl, const REAL *res
     yc[-l] = vd * ss[l];
 }
 
-/* N_l^m for l <= lmax into q[l (l+1)/2 + m]. */
-static void SUFFIX(legendre)(int lmax, REAL z, REAL *q)
-{
-    q[0] = TAB(diag)[0];
-    if (lmax == 0) return;
-    q[1] = TAB(a)[1] * z * q[0];
-    q[2] = TAB(diag)[1];
-    for (int l = 2; l <= lmax; ++l) {
-        const int t = l * (l + 1) / 2;
-        SUFFIX(band)(l, t, z, q + t - l, q + t - 2 * l + 1, q + t);
-    }
-}
-
 /* Columns m and m+1 of y = w Y from band m+2 on, given N_{m+1}^m (n1a), N_m^m (n2a),
  * N_{m+1}^{m+1} (n1b); column m's output factors sca, ssa (1 and 0 for m = 0, whose
  * "negative" store is then overwritten).  The two recurrences run in lockstep with
@@ -183,36 +170,87 @@ void SUFFIX(shl__sh_eval_w)(int lmax, const REAL u[3], const REAL *w, REAL *y)
     }
 }
 
+/* Outputs of columns m = 1 .. 2 np of band l from its row ql (p, r, h as below) into
+ * yp[m-1] (k = l(l+1) + m) and yn[1-m] (k = l(l+1) - m), and likewise for the gradient
+ * rows: positive-m and negative-m entries as separate (restrict) pointers, since they
+ * never overlap.  The inner loop has the fixed count 2, so -O2 runs it as one vector step. */
+static inline void SUFFIX(emit)(int np, REAL x, REAL yy, REAL z, REAL wl, REAL a, REAL b,
+                                const REAL *restrict ql, const REAL *restrict dz, const REAL *restrict sc,
+                                const REAL *restrict ss, REAL *restrict yp, REAL *restrict yn, REAL *restrict xp,
+                                REAL *restrict xn, REAL *restrict gp, REAL *restrict gn, REAL *restrict zp,
+                                REAL *restrict zn)
+{
+    for (int j = 0; j < np; ++j)
+        for (int e = 0; e < 2; ++e) {
+            const int i = 2 * j + e, m = i + 1; /* outputs at k = l(l+1) +- m */
+            const REAL n = ql[m], d = dz[m] * ql[m + 1], v = wl * n, p = a * n * TAB(mval)[m];
+            const REAL r = b * n - (p + a * (z * d)), h = a * d + z * r, rx = x * r, ry = yy * r;
+            yp[i] = v * sc[m], yn[-i] = v * ss[m];
+            xp[i] = p * sc[m - 1] + rx * sc[m], xn[-i] = p * ss[m - 1] + rx * ss[m];
+            gp[i] = ry * sc[m] - p * ss[m - 1], gn[-i] = p * sc[m - 1] + ry * ss[m];
+            zp[i] = h * sc[m], zn[-i] = h * ss[m];
+        }
+}
+
+/* Fused values and weighted gradients, band by band (band(): two columns per step):
+ *   y[k] = w[l] Y_k(u),  grad[a*stride + k] = al[l] dg_k/du_a + u_a (be[l] Y_k - al[l] u.grad g_k)
+ * for k = l(l+1)+m, with g_k the polynomial extension above.  On its m-column,
+ * u.grad g = (m N + z dN/dz) sqrt2 C_m (S_m), since x C_{m-1} - y S_{m-1} = C_m and
+ * x S_{m-1} + y C_{m-1} = S_m; so every output is a product of per-(l, m) scalars
+ * p = al m N, r = be N - al (m N + z dN), h = al dN + z r with the azimuthal factors:
+ *   grad_x = p C_{m-1} + x r C_m,  grad_y = -p S_{m-1} + y r C_m,  grad_z = h C_m
+ *   (S side: p S_{m-1} + x r S_m,  p C_{m-1} + y r S_m,  h S_m).
+ * dN_l^l/dz = 0: dz_ll = 0 times a zero stored past the end of the row.  al = 1, be = 0
+ * is the tangential gradient (I - u u^T) grad g of Y_k. */
+void SUFFIX(shl__sh_eval_wgrad)(int lmax, const REAL u[3], const REAL *w, const REAL *al, const REAL *be,
+                                REAL *restrict y, REAL *restrict grad, int stride)
+{
+    const REAL x = u[0], yy = u[1], z = u[2];
+    REAL q[SHL__SH_NTRI + 1], sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1];
+    REAL *restrict gx = grad, *restrict gy = grad + stride, *restrict gz = grad + 2 * stride;
+    SUFFIX(azimuth)(lmax, x, yy, sc, ss);
+    q[0] = TAB(diag)[0];
+    {   /* band 0: Y_00 constant */
+        const REAL r = be[0] * q[0];
+        y[0] = w[0] * q[0];
+        gx[0] = x * r, gy[0] = yy * r, gz[0] = z * r;
+    }
+    for (int l = 1; l <= lmax; ++l) {
+        const int t = l * (l + 1) / 2, base = l * (l + 1);
+        REAL *restrict ql = q + t;
+        if (l == 1) {
+            ql[0] = TAB(a)[1] * z * q[0];
+            ql[1] = TAB(diag)[1];
+        } else {
+            SUFFIX(band)(l, t, z, q + t - l, q + t - 2 * l + 1, ql);
+        }
+        ql[l + 1] = 0;
+        const REAL *dz = TAB(dz) + t, wl = w[l], a = al[l], b = be[l];
+        REAL *yc = y + base, *xc = gx + base, *yg = gy + base, *zc = gz + base;
+        {   /* m = 0: grad g = (0, 0, dN/dz) */
+            const REAL n = ql[0], d = dz[0] * ql[1], r = b * n - a * (z * d);
+            yc[0] = wl * n;
+            xc[0] = x * r, yg[0] = yy * r, zc[0] = a * d + z * r;
+        }
+        SUFFIX(emit)(l / 2, x, yy, z, wl, a, b, ql, dz, sc, ss, yc + 1, yc - 1, xc + 1, xc - 1, yg + 1, yg - 1, zc + 1,
+                     zc - 1);
+        if (l & 1) {   /* m = l alone: dN/dz = 0 */
+            const REAL n = ql[l], v = wl * n, p = a * n * TAB(mval)[l], r = b * n - p, rx = x * r, ry = yy * r;
+            yc[l] = v * sc[l], yc[-l] = v * ss[l];
+            xc[l] = p * sc[l - 1] + rx * sc[l], xc[-l] = p * ss[l - 1] + rx * ss[l];
+            yg[l] = ry * sc[l] - p * ss[l - 1], yg[-l] = p * sc[l - 1] + ry * ss[l];
+            zc[l] = z * r * sc[l], zc[-l] = z * r * ss[l];
+        }
+    }
+}
+
 void SUFFIX(shl__sh_eval_grad)(int lmax, const REAL u[3], REAL *y, REAL *grad, int stride)
 {
     if (!grad) {
         SUFFIX(shl__sh_eval_w)(lmax, u, NULL, y);
         return;
     }
-    const REAL x = u[0], yy = u[1], z = u[2];
-    REAL q[SHL__SH_NTRI], sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1];
-    SUFFIX(azimuth)(lmax, x, yy, sc, ss);
-    SUFFIX(legendre)(lmax, z, q);
-    for (int l = 0; l <= lmax; ++l) {
-        const int t = l * (l + 1) / 2, base = l * (l + 1);
-        const REAL *ql = q + t, *dz = TAB(dz) + t;
-        /* m = 0: grad g = (0, 0, dN_l^0/dz) */
-        const REAL dn0 = l > 0 ? dz[0] * ql[1] : 0;
-        y[base] = ql[0];
-        grad[base] = -dn0 * z * x;
-        grad[stride + base] = -dn0 * z * yy;
-        grad[2 * stride + base] = dn0 - dn0 * z * z;
-        for (int m = 1; m <= l; ++m) {
-            const REAL n = ql[m], dn = m < l ? dz[m] * ql[m + 1] : 0, nm = n * (REAL)m;
-            y[base + m] = n * sc[m];
-            y[base - m] = n * ss[m];
-            const REAL gp[3] = {nm * sc[m - 1], -nm * ss[m - 1], dn * sc[m]};
-            const REAL gn[3] = {nm * ss[m - 1], nm * sc[m - 1], dn * ss[m]};
-            const REAL rp = gp[0] * x + gp[1] * yy + gp[2] * z, rn = gn[0] * x + gn[1] * yy + gn[2] * z;
-            for (int k = 0; k < 3; ++k) {
-                grad[k * stride + base + m] = gp[k] - rp * u[k];
-                grad[k * stride + base - m] = gn[k] - rn * u[k];
-            }
-        }
-    }
+    REAL zero[SHL_LMAX_MAX + 1];
+    for (int l = 0; l <= lmax; ++l) zero[l] = 0;
+    SUFFIX(shl__sh_eval_wgrad)(lmax, u, TAB(one), TAB(one), zero, y, grad, stride);
 }

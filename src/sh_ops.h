@@ -14,6 +14,12 @@ void shl__sh_eval_w_f(int lmax, const float u[3], const float *w, float *y);
  * surface gradient grad[a*stride + k] = d/du_a of Y_k(u/|u|) at |u| = 1. */
 void shl__sh_eval_grad_d(int lmax, const double u[3], double *y, double *grad, int stride);
 void shl__sh_eval_grad_f(int lmax, const float u[3], float *y, float *grad, int stride);
+/* One pass: y[k] = w[l] Y_k(u) and grad[a*stride + k] = al[l] G_a + u_a (be[l] Y_k - al[l] u.G)
+ * with G = grad of Y_k's polynomial extension (al = 1, be = 0: the surface gradient). */
+void shl__sh_eval_wgrad_d(int lmax, const double u[3], const double *w, const double *al, const double *be,
+                          double *restrict y, double *restrict grad, int stride);
+void shl__sh_eval_wgrad_f(int lmax, const float u[3], const float *w, const float *al, const float *be,
+                          float *restrict y, float *restrict grad, int stride);
 
 /* ---- spherical caps and lights (sphere.c) ------------------------------ */
 

@@ -40,15 +40,14 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
         SUFFIX(shl__sh_eval_w)(lmax, u, w, coeffs); /* HVL Eq. (15): w_l Y_lm(axis) */
         return;
     }
-    SUFFIX(shl__sh_eval_grad)(lmax, u, coeffs, grad, nc); /* Y_lm(axis) and its gradient */
-    for (int l = 0; l <= lmax; ++l)
-        for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
-            if (grad) {
-                /* d/dx [w_l(cos a) Y(u)] = w_l' (d cos a/dx) Y - (w_l / d) (I - u u^T) grad Y */
-                const REAL radial = (REAL)g->k_alpha_s * dw[l] * coeffs[k], tang = w[l] * (REAL)g->inv_d_s;
-                for (int a = 0; a < 3; ++a) /* back from scaled units in double (sh_ops.h) */
-                    grad[a * nc + k] = (REAL)((-radial * u[a] - tang * grad[a * nc + k]) * g->grad_scale[0] * g->grad_scale[1]);
-            }
-            coeffs[k] *= w[l]; /* HVL Eq. (15): sqrt(4 pi/(2l+1)) zh_l Y_lm(axis) = w_l Y_lm(axis) */
-        }
+    /* d/dx [w_l(cos a) Y(u)] = w_l' (d cos a/dx) Y - (w_l / d) (I - u u^T) grad Y with
+     * d cos a/dx = -k_alpha u (HVL Eq. (15) differentiated): al = -w_l / d, be = -k_alpha w_l'
+     * in shl__sh_eval_wgrad, which forms coefficients and gradient in one pass */
+    REAL al[SHL_LMAX_MAX + 1], be[SHL_LMAX_MAX + 1];
+    const REAL inv_d = (REAL)g->inv_d_s, ka = (REAL)g->k_alpha_s;
+    for (int l = 0; l <= lmax; ++l) al[l] = -w[l] * inv_d, be[l] = -ka * dw[l];
+    SUFFIX(shl__sh_eval_wgrad)(lmax, u, w, al, be, coeffs, grad, nc);
+    if (g->grad_scale[0] != 1.0 || g->grad_scale[1] != 1.0)
+        for (int k = 0; k < 3 * nc; ++k) /* back from scaled units in double (sh_ops.h) */
+            grad[k] = (REAL)(grad[k] * g->grad_scale[0] * g->grad_scale[1]);
 }

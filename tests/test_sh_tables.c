@@ -154,3 +154,112 @@ SHL_TEST(sh_basis_every_lmax_vs_long_double)
     CHECK(worst <= 1.0 && worst_w <= 1.0 && worst_f <= 1.0);
     CHECK(worst_ref == 0.0);
 }
+
+/* Y_lm(d) and the Cartesian gradient G of its polynomial extension (see sh_basis_impl.h)
+ * in long double, by an independent route: dN_l^m/dz from the l-recurrence
+ * differentiated, dN_l = a (N_{l-1} + z dN_{l-1} - b dN_{l-2}) (dN_m^m = 0), not from
+ * column m+1; every factor a long double square root. */
+static void ld_basis_grad(int lmax, const long double d[3], long double *y, long double *gc)
+{
+    const int nc = (lmax + 1) * (lmax + 1);
+    const long double x = d[0], yy = d[1], z = d[2], r2 = sqrtl(2.0L);
+    long double nmm = sqrtl(0.25L / PI_L), cm = 1.0L, sm = 0.0L, cp = 0.0L, sp = 0.0L; /* C_m, S_m, C_{m-1}, S_{m-1} */
+    for (int m = 0; m <= lmax; ++m) {
+        if (m > 0) {
+            nmm *= -sqrtl((2.0L * m + 1.0L) / (2.0L * m));
+            cp = cm, sp = sm;
+            const long double c = cm * x - sm * yy;
+            sm = cm * yy + sm * x;
+            cm = c;
+        }
+        long double p1 = 0.0L, p2 = 0.0L, d1 = 0.0L, d2 = 0.0L;
+        for (int l = m; l <= lmax; ++l) {
+            long double p = nmm, dp = 0.0L;
+            if (l == m + 1) {
+                p = sqrtl(2.0L * m + 3.0L) * z * nmm;
+                dp = sqrtl(2.0L * m + 3.0L) * nmm;
+            } else if (l > m + 1) {
+                const long double l2 = (long double)l * l, m2 = (long double)m * m, k2 = (l - 1.0L) * (l - 1.0L);
+                const long double a = sqrtl((4 * l2 - 1) / (l2 - m2)), b = sqrtl((k2 - m2) / (4 * k2 - 1));
+                p = a * (z * p1 - b * p2);
+                dp = a * (p1 + z * d1 - b * d2);
+            }
+            p2 = p1, p1 = p, d2 = d1, d1 = dp;
+            const int k = l * (l + 1);
+            if (m == 0) {
+                y[k] = p;
+                gc[k] = 0.0L, gc[nc + k] = 0.0L, gc[2 * nc + k] = dp;
+                continue;
+            }
+            const long double pm = r2 * m * p;
+            y[k + m] = r2 * p * cm, y[k - m] = r2 * p * sm;
+            gc[k + m] = pm * cp, gc[nc + k + m] = -pm * sp, gc[2 * nc + k + m] = r2 * dp * cm;
+            gc[k - m] = pm * sp, gc[nc + k - m] = pm * cp, gc[2 * nc + k - m] = r2 * dp * sm;
+        }
+    }
+}
+
+/* shl__sh_eval_wgrad (double and float) against al G + u (be Y - al u.G) formed from
+ * ld_basis_grad in long double, with u.G taken as the dot product (the kernel uses the
+ * identity u.G = (m N + z dN/dz) C_m instead), for random weights of both signs.
+ * Error analysis: as above, column m at band l carries <= 5 (l - m) eps of the band's
+ * scale K_l = sqrt((2l+1)/(4 pi)); dN/dz = dz N_l^{m+1} with |dz| <= l + 1 scales that
+ * by l + 1, and the derivative of a degree-l polynomial is at most l^2 times its maximum
+ * (Markov), so every Cartesian term (m N C_{m-1}, dN C_m, their sum with z) is bounded by
+ * (l+1)^2 K_l and carries <= 6 (l+1)^3 eps K_l (4 more roundings in p, r, h and the
+ * output sums, inside the factor 6).  Bound per band: 6 (l+1) eps K_l ((l+1)^2 |al| +
+ * |be|) + 2 eps |w| K_l (eps of the arithmetic).  Float: the reference at the
+ * float-rounded direction (the same polynomial extension). */
+SHL_TEST(sh_wgrad_vs_long_double)
+{
+    rng_t r = {17};
+    static long double yl[NC], gl[3 * NC];
+    static double y[NC], g[3 * NC], w[L + 1], al[L + 1], be[L + 1];
+    static float yf[NC], gf[3 * NC], wf[L + 1], alf[L + 1], bef[L + 1];
+    double worst = 0.0, worst_f = 0.0;
+    for (int lmax = 0; lmax <= L; ++lmax)
+        for (int it = 0; it < 12; ++it) {
+            double d[3];
+            rng_unit_vector(&r, d);
+            if (it < 2) d[0] = d[1] = 0.0, d[2] = it ? -1.0 : 1.0; /* the poles */
+            for (int l = 0; l <= lmax; ++l) {
+                w[l] = 2.0 * rng_uniform(&r) - 1.0, al[l] = 2.0 * rng_uniform(&r) - 1.0;
+                be[l] = 2.0 * rng_uniform(&r) - 1.0;
+                wf[l] = (float)w[l], alf[l] = (float)al[l], bef[l] = (float)be[l];
+            }
+            const float df[3] = {(float)d[0], (float)d[1], (float)d[2]};
+            for (int pass = 0; pass < 2; ++pass) {
+                const int nc = SHL_NCOEFFS(lmax);
+                const long double u[3] = {pass ? df[0] : d[0], pass ? df[1] : d[1], pass ? df[2] : d[2]};
+                ld_basis_grad(lmax, u, yl, gl);
+                if (pass)
+                    shl__sh_eval_wgrad_f(lmax, df, wf, alf, bef, yf, gf, nc);
+                else
+                    shl__sh_eval_wgrad_d(lmax, d, w, al, be, y, g, nc);
+                const double eps = pass ? FLT_EPSILON : DBL_EPSILON;
+                for (int l = 0; l <= lmax; ++l) {
+                    const long double wl = pass ? wf[l] : w[l], a = pass ? alf[l] : al[l], b = pass ? bef[l] : be[l];
+                    const double kl = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)), l1 = l + 1.0;
+                    const double tol_y = 6.0 * l1 * eps * kl * fabs((double)wl);
+                    const double tol_g = 6.0 * l1 * eps * kl * (l1 * l1 * fabs((double)a) + fabs((double)b)) +
+                                         2.0 * eps * kl * fabs((double)wl);
+                    for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+                        const long double ug = u[0] * gl[k] + u[1] * gl[nc + k] + u[2] * gl[2 * nc + k];
+                        const double gy = pass ? yf[k] : y[k];
+                        double e = (double)fabsl(gy - wl * yl[k]) / tol_y;
+                        for (int c = 0; c < 3; ++c) {
+                            const long double want = a * gl[c * nc + k] + u[c] * (b * yl[k] - a * ug);
+                            const double got = pass ? gf[c * nc + k] : g[c * nc + k];
+                            e = fmax(e, (double)fabsl(got - want) / tol_g);
+                        }
+                        if (pass)
+                            worst_f = fmax(worst_f, e);
+                        else
+                            worst = fmax(worst, e);
+                    }
+                }
+            }
+        }
+    harness_note("worst error / bound (lmax 0..%d, values and gradient): double %.3f, float %.3f", L, worst, worst_f);
+    CHECK(worst <= 1.0 && worst_f <= 1.0);
+}

@@ -11,7 +11,8 @@
  * k15[l] = sqrt(4 pi / (2l+1)) (HVL Eq. (15)), and for the cap weights of
  * sphere_impl.h (HVL Eq. (13)-(14)) the Legendre recurrence
  * P_{l+1} = lega[l] c P_l - legb[l] P_{l-1}, lega = (2l+1)/(l+1), legb = l/(l+1),
- * capk[l] = 2 pi / (l (l+1)) (0 at l = 0), and one[l] = 1 (unit band weights).
+ * capk[l] = 2 pi / (l (l+1)) (0 at l = 0), one[l] = 1 (unit band weights), and mval[m] = m
+ * (the column index as a factor of the gradient kernel, sh_basis_impl.h).
  * Triangular index
  * l (l+1) / 2 + m (b = 0 where undefined).  Every factor is computed with the
  * same double operations as the per-call code it replaced (float: rounded from
@@ -48,7 +49,7 @@ static void emit(const char *type, const char *name, const char *size, const dou
 int main(void)
 {
     static double a[NTRI], b[NTRI], dz[NTRI], diag[L + 1], diag_f[L + 1], k15[L + 1];
-    static double lega[L + 1], legb[L + 1], capk[L + 1], one[L + 1];
+    static double lega[L + 1], legb[L + 1], capk[L + 1], one[L + 1], mval[L + 1];
     float df = (float)sqrt(0.25 / M_PI);
     diag[0] = sqrt(0.25 / M_PI);
     diag_f[0] = df;
@@ -63,6 +64,7 @@ int main(void)
         legb[l] = l / (l + 1.0);
         capk[l] = l > 0 ? 2.0 * M_PI / (l * (l + 1.0)) : 0.0;
         one[l] = 1.0;
+        mval[l] = l;
         for (int m = 0; m <= l; ++m) {
             const int t = l * (l + 1) / 2 + m;
             const double l2 = (double)l * l, m2 = (double)m * m;
@@ -84,6 +86,7 @@ int main(void)
     emit("double", "shl__sh_legb_d", "SHL_LMAX_MAX + 1", legb, L + 1);
     emit("double", "shl__sh_capk_d", "SHL_LMAX_MAX + 1", capk, L + 1);
     emit("double", "shl__sh_one_d", "SHL_LMAX_MAX + 1", one, L + 1);
+    emit("double", "shl__sh_mval_d", "SHL_LMAX_MAX + 1", mval, L + 1);
     emit("float", "shl__sh_diag_f", "SHL_LMAX_MAX + 1", diag_f, L + 1);
     emit("float", "shl__sh_a_f", "SHL__SH_NTRI", a, NTRI);
     emit("float", "shl__sh_b_f", "SHL__SH_NTRI", b, NTRI);
@@ -93,5 +96,6 @@ int main(void)
     emit("float", "shl__sh_legb_f", "SHL_LMAX_MAX + 1", legb, L + 1);
     emit("float", "shl__sh_capk_f", "SHL_LMAX_MAX + 1", capk, L + 1);
     emit("float", "shl__sh_one_f", "SHL_LMAX_MAX + 1", one, L + 1);
+    emit("float", "shl__sh_mval_f", "SHL_LMAX_MAX + 1", mval, L + 1);
     return 0;
 }
