@@ -145,20 +145,26 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
         }
         for (int l = 2; l <= lmax; ++l)
             for (int k = 0; k < NL; ++k) surf[l][k] = s_b[l] * bsum[l - 1][k] + s_s[l] * surf[l - 2][k]; /* Eq. 29 */
-        for (int k = 0; k < NL && d0 + k < ndir; ++k) {
-            const int dir = d0 + k;
-            for (int l = 0; l <= lmax; ++l) { /* Eq. 13 */
-                zh[dir * SHL__ZH_STRIDE + l] = norm[l] * surf[l][k];
+        for (int l = 0; l <= lmax; ++l) {
 #if WITH_GRAD
-                REAL gx = 0, gy = 0, gz = 0; /* Wu Eq. 11, 29: sum over edges of mu_e I_l */
-                for (int e = 0; e < n; ++e) {
-                    gx += (REAL)g->mu[e][0] * edge_i[e][l][k];
-                    gy += (REAL)g->mu[e][1] * edge_i[e][l][k];
-                    gz += (REAL)g->mu[e][2] * edge_i[e][l][k];
+            REAL gx[NL], gy[NL], gz[NL]; /* Wu Eq. 11, 29: sum over edges of mu_e I_l */
+            for (int k = 0; k < NL; ++k) gx[k] = 0, gy[k] = 0, gz[k] = 0;
+            for (int e = 0; e < n; ++e) {
+                const REAL mx = (REAL)g->mu[e][0], my = (REAL)g->mu[e][1], mz = (REAL)g->mu[e][2];
+                for (int k = 0; k < NL; ++k) {
+                    gx[k] += mx * edge_i[e][l][k];
+                    gy[k] += my * edge_i[e][l][k];
+                    gz[k] += mz * edge_i[e][l][k];
                 }
-                zh_grad[dir * SHL__ZH_STRIDE + l] = norm[l] * gx;
-                zh_grad[SHL__ZH_BLOCK + dir * SHL__ZH_STRIDE + l] = norm[l] * gy;
-                zh_grad[2 * SHL__ZH_BLOCK + dir * SHL__ZH_STRIDE + l] = norm[l] * gz;
+            }
+#endif
+            for (int k = 0; k < NL && d0 + k < ndir; ++k) {
+                const int at = (d0 + k) * SHL__ZH_STRIDE + l;
+                zh[at] = norm[l] * surf[l][k]; /* Eq. 13 */
+#if WITH_GRAD
+                zh_grad[at] = norm[l] * gx[k];
+                zh_grad[SHL__ZH_BLOCK + at] = norm[l] * gy[k];
+                zh_grad[2 * SHL__ZH_BLOCK + at] = norm[l] * gz[k];
 #endif
             }
         }
