@@ -28,6 +28,9 @@
  * step, so the lanes' chains overlap in the pipeline (or share SIMD registers).
  * Each lane does exactly the one-lobe arithmetic, so results are unchanged bit
  * for bit.  A partial last block repeats its last lobe in the spare lanes.
+ * Two lanes: gcc -O2 keeps them in one SSE2 register; 3 or 4 lanes spilled the
+ * state and measured slower (and pad more lobes at low lmax).  The lane loops
+ * are unrolled (#pragma GCC unroll) so the lane arrays live in registers.
  * Each edge's recurrence state stays in registers and only the per-band sums
  * (Eq. 14 and the gradient) touch memory; the surface recurrence (Eq. 29) runs
  * afterwards over the sums. */
