@@ -2,8 +2,10 @@
  *  - time per evaluation vs lmax with the ZH-recurrence / rotation split (Fig. 6),
  *  - time vs number of edges (Fig. 7), with fitted exponents,
  *  - ZH recurrence vs the monomial-moment baseline (Table 2 "Monomial"),
+ *  - gradient cost: shl_polygon_grad / shl_polygon, whole call and ZH part (Wu 2020 Table 1),
  *  - scalar evaluations per second per core (the SIMD baseline).
- * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help. */
+ * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
+ * CSV rows "grad": ns_total and ns_zh of the gradient calls. */
 #include "monomial.h"
 #include "polygon.h"
 #include "shlight.h"
@@ -66,6 +68,26 @@ static void run_rotation(void *p)
         shl__zh_to_sh(j->lmax, zh_buf, coef_buf);
         bench_sink += coef_buf[1];
     }
+}
+
+static void run_full_grad(void *p)
+{
+    job *j = p;
+    static double grad_buf[3 * SHL_NCOEFFS(SHL_LMAX_MAX)];
+    double acc = 0;
+    for (long i = 0; i < j->inner; ++i) {
+        shl_polygon_grad(j->ctx, j->pts[i % NPTS], j->verts, j->n, coef_buf, grad_buf);
+        acc += grad_buf[0];
+    }
+    bench_sink += acc;
+}
+
+static void run_zh_grad_only(void *p)
+{
+    job *j = p;
+    static double zg[3 * SHL__ZH_BLOCK];
+    for (long i = 0; i < j->inner; ++i) shl__poly_zh_grad_d(&j->geom[i % NPTS], j->lmax, zh_buf, zg);
+    bench_sink += zg[1];
 }
 
 static void run_zh_only(void *p) /* recurrence only, geometry precomputed */
@@ -132,7 +154,8 @@ int main(int argc, char **argv)
         "Polygon-light SH coefficients (shl_polygon, Wang & Ramamoorthi 2018), one core, scalar double:\n"
         "time per evaluation vs lmax 2..30 split into ZH recurrence and rotation (Fig. 6), vs edge count\n"
         "3..32 (Fig. 7) with fitted exponents, the ZH recurrence vs the monomial-moment baseline (Table 2),\n"
-        "and evaluations per second.  About 10 s on an idle 2-core machine.\n"
+        "the gradient cost (shl_polygon_grad / shl_polygon at lmax 4, 8, 14, 30; Wu 2020 Table 1),\n"
+        "and evaluations per second.  About 12 s on an idle 2-core machine.\n"
         "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
         opts, 1, 0};
     bench_parse(&cli, argc, argv, NULL);
@@ -142,7 +165,7 @@ int main(int argc, char **argv)
     bench_print_machine(stdout);
     if (csv) fprintf(csv, "section,lmax,edges,ns_total,ns_zh,ns_rotation,ns_monomial_total\n");
 
-    bench_progress("time vs lmax (step 1/4)...");
+    bench_progress("time vs lmax (step 1/5)...");
     printf("\n## Time per evaluation vs lmax (triangle light, double; Wang 2018 Fig. 6)\n\n");
     printf("| lmax | coeffs | total ns | setup+ZH recurrence ns | rotation ns | ns/coeff |\n|---|---|---|---|---|---|\n");
     const int lmaxes[] = {2, 4, 6, 8, 10, 12, 14, 18, 22, 26, 30};
@@ -163,7 +186,7 @@ int main(int argc, char **argv)
            "(1 = linear; the rotation is O(lmax^3) = coeffs^1.5 and takes over at high lmax)\n",
            bench_loglog_slope(xs, ys, nl));
 
-    bench_progress("time vs edge count (step 2/4)...");
+    bench_progress("time vs edge count (step 2/5)...");
     printf("\n## Time per evaluation vs edge count (lmax 8, double; Wang 2018 Fig. 7)\n\n| edges | total ns |\n|---|---|\n");
     shl_ctx *ctx8;
     shl_ctx_create(8, &ctx8);
@@ -179,7 +202,7 @@ int main(int argc, char **argv)
     }
     printf("\nFitted exponent of time vs edges: %.2f (1 = linear)\n", bench_loglog_slope(xs, ys, ne));
 
-    bench_progress("ZH recurrence vs monomial baseline (step 3/4)...");
+    bench_progress("ZH recurrence vs monomial baseline (step 3/5)...");
     printf("\n## ZH recurrence vs monomial-moment baseline (triangle; Wang 2018 Table 2)\n\n");
     printf("| lmax | recurrence ns | monomial ns | monomial/recurrence time (ZH part) | same, full pipeline | max |ZH recurrence - monomial| |\n|---|---|---|---|---|---|\n");
     const int cmp_l[4] = {8, 14, 20, 30};
@@ -203,7 +226,22 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx);
     }
 
-    bench_progress("scalar throughput (step 4/4)...");
+    bench_progress("gradient cost (step 4/5)...");
+    printf("\n## Gradient cost (triangle, double; Wu 2020 Table 1)\n\n");
+    printf("| lmax | shl_polygon ns | shl_polygon_grad ns | grad/coeffs | ZH recurrence ns | ZH + gradient ns | ratio, ZH part |\n|---|---|---|---|---|---|---|\n");
+    const int grad_l[4] = {4, 8, 14, 30};
+    for (int i = 0; i < 4; ++i) {
+        shl_ctx *ctx;
+        shl_ctx_create(grad_l[i], &ctx);
+        setup(&j, ctx, 3);
+        const double tf = timed(run_full, &j), tg = timed(run_full_grad, &j);
+        const double tz = timed(run_zh_only, &j), tzg = timed(run_zh_grad_only, &j);
+        printf("| %d | %.0f | %.0f | %.2f | %.0f | %.0f | %.2f |\n", grad_l[i], tf * 1e9, tg * 1e9, tg / tf, tz * 1e9, tzg * 1e9, tzg / tz);
+        if (csv) fprintf(csv, "grad,%d,3,%.1f,%.1f,,\n", grad_l[i], tg * 1e9, tzg * 1e9);
+        shl_ctx_destroy(ctx);
+    }
+
+    bench_progress("scalar throughput (step 5/5)...");
     setup(&j, ctx8, 3);
     const double td = timed(run_full, &j), tf = timed(run_full_f, &j);
     printf("\n## Scalar throughput, one core, triangle, lmax 8\n\n");

@@ -22,9 +22,22 @@
  * differences) and write s P(a_{e+1}) + b P(a_e) = B_1 P(a_e) + s dP, with
  * B_1 = a sin(gamma) + b (1 - cos(gamma)) formed in double.
  *
- * Loop order.  Edges outer, bands inner: each edge's recurrence state stays in
- * registers and only the per-band sums (Eq. 14 and the gradient) touch memory;
- * the surface recurrence (Eq. 29) runs afterwards over the sums. */
+ * Loop order.  Lobes in blocks of SHL__ZH_LANES side by side (their recurrences
+ * are independent: with one lobe at a time every band step waited on the
+ * previous one), edges next, bands innermost with the lanes inside each band
+ * step, so the lanes' chains overlap in the pipeline (or share SIMD registers).
+ * Each lane does exactly the one-lobe arithmetic, so results are unchanged bit
+ * for bit.  A partial last block repeats its last lobe in the spare lanes.
+ * Two lanes: gcc -O2 keeps them in one SSE2 register; 3 or 4 lanes spilled the
+ * state and measured slower (and pad more lobes at low lmax).  The lane loops
+ * are unrolled (#pragma GCC unroll) so the lane arrays live in registers.
+ * Each edge's recurrence state stays in registers and only the per-band sums
+ * (Eq. 14 and the gradient) touch memory; the surface recurrence (Eq. 29) runs
+ * afterwards over the sums. */
+
+#ifndef SHL__ZH_LANES
+#define SHL__ZH_LANES 2
+#endif
 
 void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #if WITH_GRAD
@@ -55,84 +68,108 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
         s_b[l] = (REAL)((2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)));   /* Eq. 29 weights */
         s_s[l] = (REAL)((l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0)));
     }
-    for (int dir = 0; dir < ndir; ++dir) {
-        const double *lobe = shl__zh_dir[dir];
-        REAL bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1];
+    enum { NL = SHL__ZH_LANES };
+    for (int d0 = 0; d0 < ndir; d0 += NL) {
+        const double *lobe[NL];
+        for (int k = 0; k < NL; ++k) lobe[k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1];
+        REAL bsum[SHL_LMAX_MAX + 1][NL], surf[SHL_LMAX_MAX + 1][NL];
 #if WITH_GRAD
         /* I_l per edge; summed with the edge normals after the loop keeps mu out of the hot registers */
-        REAL edge_i[SHL_MAX_VERTS][SHL_LMAX_MAX + 1];
+        REAL edge_i[SHL_MAX_VERTS][SHL_LMAX_MAX + 1][NL];
 #endif
-        for (int l = 0; l <= lmax; ++l) bsum[l] = 0;
+        for (int l = 0; l <= lmax; ++l)
+            for (int k = 0; k < NL; ++k) bsum[l][k] = 0;
         for (int e = 0; e < n; ++e) {
             const int f = (e + 1 == n) ? 0 : e + 1;
-            /* Eq. 20: coordinates of the lobe axis in the edge frame */
-            const double ae = lobe[0] * g->w[e][0] + lobe[1] * g->w[e][1] + lobe[2] * g->w[e][2];
-            const double be = lobe[0] * g->lam[e][0] + lobe[1] * g->lam[e][1] + lobe[2] * g->lam[e][2];
-            const double ce = lobe[0] * g->mu[e][0] + lobe[1] * g->mu[e][1] + lobe[2] * g->mu[e][2];
-            const REAL a = (REAL)ae, c = (REAL)ce;
-            const REAL af = (REAL)(lobe[0] * g->w[f][0] + lobe[1] * g->w[f][1] + lobe[2] * g->w[f][2]);
-            const REAL c2 = (REAL)(ce * ce); /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
-            const REAL s = (REAL)(ae * g->sin_gamma[e] - be * g->cos_gamma[e]);
-            const REAL b1 = (REAL)(ae * g->sin_gamma[e] + be * g->omc_gamma[e]); /* B_1, Eq. 27 */
-            const REAL da = (REAL)(lobe[0] * g->dw[e][0] + lobe[1] * g->dw[e][1] + lobe[2] * g->dw[e][2]);
+            REAL a[NL], c[NL], af[NL], c2[NL], s[NL], b1[NL], da[NL];
+            REAL p_lm1[NL], p_lm2[NL], dp_lm1[NL], dp_lm2[NL], b_lm1[NL], b_lm2[NL], d_lm1[NL], d_lm2[NL];
             const REAL gamma = (REAL)g->gamma[e];
-            REAL p_lm1 = a, p_lm2 = 1;          /* P_{l-1}(a_e), P_{l-2}(a_e) */
-            REAL dp_lm1 = da, dp_lm2 = 0;       /* dP_{l-1}, dP_{l-2} */
-            REAL b_lm1 = b1, b_lm2 = gamma;     /* B_1, B_0 (Eq. 26-27) */
-            REAL d_lm1 = gamma, d_lm2 = 0;      /* D_1, D_0 (Eq. 28) */
-            bsum[0] += c * gamma;
-            if (lmax >= 2) bsum[1] += c * b1;
 #if WITH_GRAD
             const REAL i0 = (REAL)g->f_integral[e], fp1 = (REAL)g->fprime1[e];
-            const REAL v = (REAL)(lobe[0] * g->gvec[e][0] + lobe[1] * g->gvec[e][1] + lobe[2] * g->gvec[e][2]);
-            /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-            REAL i_lm1 = (v * gamma - (fp1 * da - i0 * a)) / 2;  /* I_1 */
-            REAL j_lm1 = i0, j_lm2 = 0;                          /* J_1, J_0 */
-            edge_i[e][0] = i0;
-            if (lmax >= 1) edge_i[e][1] = i_lm1;
+            REAL v[NL], i_lm1[NL], j_lm1[NL], j_lm2[NL];
 #endif
+#pragma GCC unroll 8
+            for (int k = 0; k < NL; ++k) {
+                const double *u = lobe[k];
+                /* Eq. 20: coordinates of the lobe axis in the edge frame */
+                const double ae = u[0] * g->w[e][0] + u[1] * g->w[e][1] + u[2] * g->w[e][2];
+                const double be = u[0] * g->lam[e][0] + u[1] * g->lam[e][1] + u[2] * g->lam[e][2];
+                const double ce = u[0] * g->mu[e][0] + u[1] * g->mu[e][1] + u[2] * g->mu[e][2];
+                a[k] = (REAL)ae, c[k] = (REAL)ce;
+                af[k] = (REAL)(u[0] * g->w[f][0] + u[1] * g->w[f][1] + u[2] * g->w[f][2]);
+                c2[k] = (REAL)(ce * ce); /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
+                s[k] = (REAL)(ae * g->sin_gamma[e] - be * g->cos_gamma[e]);
+                b1[k] = (REAL)(ae * g->sin_gamma[e] + be * g->omc_gamma[e]); /* B_1, Eq. 27 */
+                da[k] = (REAL)(u[0] * g->dw[e][0] + u[1] * g->dw[e][1] + u[2] * g->dw[e][2]);
+                p_lm1[k] = a[k], p_lm2[k] = 1;         /* P_{l-1}(a_e), P_{l-2}(a_e) */
+                dp_lm1[k] = da[k], dp_lm2[k] = 0;      /* dP_{l-1}, dP_{l-2} */
+                b_lm1[k] = b1[k], b_lm2[k] = gamma;    /* B_1, B_0 (Eq. 26-27) */
+                d_lm1[k] = gamma, d_lm2[k] = 0;        /* D_1, D_0 (Eq. 28) */
+                bsum[0][k] += c[k] * gamma;
+                if (lmax >= 2) bsum[1][k] += c[k] * b1[k];
+#if WITH_GRAD
+                v[k] = (REAL)(u[0] * g->gvec[e][0] + u[1] * g->gvec[e][1] + u[2] * g->gvec[e][2]);
+                /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+                i_lm1[k] = (v[k] * gamma - (fp1 * da[k] - i0 * a[k])) / 2; /* I_1 */
+                j_lm1[k] = i0, j_lm2[k] = 0;                                /* J_1, J_0 */
+                edge_i[e][0][k] = i0;
+                if (lmax >= 1) edge_i[e][1][k] = i_lm1[k];
+#endif
+            }
             for (int l = 2; l <= ltop; ++l) {
                 const REAL rl = inv_l[l], lm1 = l_m1[l], tlm1 = twol_m1[l];
-                const REAL pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl;           /* Eq. 11 */
-                const REAL dl = tlm1 * b_lm1 + d_lm2;                            /* Eq. 32 */
-                /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-                const REAL dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
+#pragma GCC unroll 8
+                for (int k = 0; k < NL; ++k) {
+                    const REAL pl = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
+                    const REAL dl = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+                    /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
+                    const REAL dpl = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
 #if WITH_GRAD
-                const REAL il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * inv_l[l + 1];
-                const REAL jl = tlm1 * i_lm1 + j_lm2;
-                j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-                edge_i[e][l] = il;
-                if (l < lmax) { /* B_l feeds S_{l+1} only */
+                    const REAL il = (v[k] * dl - j_lm1[k] - (fp1 * dpl - i0 * pl)) * inv_l[l + 1];
+                    const REAL jl = tlm1 * i_lm1[k] + j_lm2[k];
+                    j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+                    edge_i[e][l][k] = il;
+                    /* B_lmax (l = ltop here) goes into the unused bsum[lmax]: no branch in the lanes */
 #endif
                     /* Eq. 31: C_{l-1} */
-                    const REAL cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
-                    const REAL bl = (tlm1 * cl - lm1 * b_lm2) * rl;              /* Eq. 30 */
-                    b_lm2 = b_lm1, b_lm1 = bl;
-                    bsum[l] += c * bl;                                              /* Eq. 14 */
-#if WITH_GRAD
+                    const REAL cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
+                    const REAL bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl;                /* Eq. 30 */
+                    b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
+                    bsum[l][k] += c[k] * bl;                                              /* Eq. 14 */
+                    p_lm2[k] = p_lm1[k], p_lm1[k] = pl;
+                    dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl;
+                    d_lm2[k] = d_lm1[k], d_lm1[k] = dl;
                 }
-#endif
-                p_lm2 = p_lm1, p_lm1 = pl;
-                dp_lm2 = dp_lm1, dp_lm1 = dpl;
-                d_lm2 = d_lm1, d_lm1 = dl;
             }
         }
-        surf[0] = (REAL)g->solid_angle;                                  /* S_0 */
-        if (lmax >= 1) surf[1] = bsum[0] / 2;                            /* S_1, Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = s_b[l] * bsum[l - 1] + s_s[l] * surf[l - 2]; /* Eq. 29 */
-        for (int l = 0; l <= lmax; ++l) { /* Eq. 13 */
-            zh[dir * SHL__ZH_STRIDE + l] = norm[l] * surf[l];
+        for (int k = 0; k < NL; ++k) {
+            surf[0][k] = (REAL)g->solid_angle;                               /* S_0 */
+            if (lmax >= 1) surf[1][k] = bsum[0][k] / 2;                      /* S_1, Eq. 25 */
+        }
+        for (int l = 2; l <= lmax; ++l)
+            for (int k = 0; k < NL; ++k) surf[l][k] = s_b[l] * bsum[l - 1][k] + s_s[l] * surf[l - 2][k]; /* Eq. 29 */
+        for (int l = 0; l <= lmax; ++l) {
 #if WITH_GRAD
-            REAL gx = 0, gy = 0, gz = 0; /* Wu Eq. 11, 29: sum over edges of mu_e I_l */
+            REAL gx[NL], gy[NL], gz[NL]; /* Wu Eq. 11, 29: sum over edges of mu_e I_l */
+            for (int k = 0; k < NL; ++k) gx[k] = 0, gy[k] = 0, gz[k] = 0;
             for (int e = 0; e < n; ++e) {
-                gx += (REAL)g->mu[e][0] * edge_i[e][l];
-                gy += (REAL)g->mu[e][1] * edge_i[e][l];
-                gz += (REAL)g->mu[e][2] * edge_i[e][l];
+                const REAL mx = (REAL)g->mu[e][0], my = (REAL)g->mu[e][1], mz = (REAL)g->mu[e][2];
+                for (int k = 0; k < NL; ++k) {
+                    gx[k] += mx * edge_i[e][l][k];
+                    gy[k] += my * edge_i[e][l][k];
+                    gz[k] += mz * edge_i[e][l][k];
+                }
             }
-            zh_grad[dir * SHL__ZH_STRIDE + l] = norm[l] * gx;
-            zh_grad[SHL__ZH_BLOCK + dir * SHL__ZH_STRIDE + l] = norm[l] * gy;
-            zh_grad[2 * SHL__ZH_BLOCK + dir * SHL__ZH_STRIDE + l] = norm[l] * gz;
 #endif
+            for (int k = 0; k < NL && d0 + k < ndir; ++k) {
+                const int at = (d0 + k) * SHL__ZH_STRIDE + l;
+                zh[at] = norm[l] * surf[l][k]; /* Eq. 13 */
+#if WITH_GRAD
+                zh_grad[at] = norm[l] * gx[k];
+                zh_grad[SHL__ZH_BLOCK + at] = norm[l] * gy[k];
+                zh_grad[2 * SHL__ZH_BLOCK + at] = norm[l] * gz[k];
+#endif
+            }
         }
     }
 #if WITH_GRAD
