@@ -2,6 +2,7 @@
  * BRDF values, tables against closed forms and independent quadrature, lookup
  * and frame change, allocation failure, the overlap factor H, the HVL sum
  * against an assembly from public pieces, the radius heuristics, bad input. */
+#include "asin_ref.h"
 #include "capref.h"
 #include "harness.h"
 #include "rotutil.h"
@@ -441,7 +442,7 @@ SHL_TEST(hvl_overlap_factor)
 }
 
 /* ---- H for small caps (issue 20) ------------------------------------------
- * Independent reference: asin(c) of the double c by its Taylor series in long
+ * Independent reference (tests/asin_ref.h): asin(c) of the double c by its Taylor series in long
  * double, sum_n binom(2n, n) / (4^n (2n + 1)) x^(2n+1) for |x| <= 1/2 (term ratio
  * x^2 (2n-1)^2 / (2n (2n+1)) < 1/4: 40 terms leave 4^-40 ~ 1e-24 relative), and
  * pi/2 - 2 asin(sqrt((1 - |c|) / 2)) above (1 - |c| exact); then
@@ -453,25 +454,6 @@ SHL_TEST(hvl_overlap_factor)
  * and the final roundings of S (<= 2^-55 + 2^-100) and of 1 - S (2^-53):
  * |H - H_exact| <= 1.5 * 2^-52 + 2^-53 + 2^-55 < 2.4 DBL_EPSILON, plus the 3e-30 of
  * the edge flush.  Tolerance 3 DBL_EPSILON + 16 LDBL_EPSILON (the issue asks 1e-12). */
-static long double asin_series(long double x)
-{
-    long double term = x, sum = x;
-    const long double x2 = x * x;
-    for (int n = 1; n <= 40; ++n) {
-        term *= x2 * (2.0L * n - 1.0L) * (2.0L * n - 1.0L) / ((2.0L * n) * (2.0L * n + 1.0L));
-        sum += term;
-    }
-    return sum;
-}
-
-static long double asin_ref(double c)
-{
-    const long double ac = fabsl((long double)c);
-    if (ac <= 0.5L) return asin_series(c);
-    const long double r = 1.570796326794896619231321691639751442L - 2.0L * asin_series(sqrtl((1.0L - ac) / 2.0L));
-    return c < 0.0 ? -r : r;
-}
-
 static long double smoothstep_ref(long double x)
 {
     if (x <= 0.0L) return 0.0L;

@@ -18,29 +18,10 @@
  *    LDBL_EPSILON a): exactly 1 above, exactly 0 below;
  *  - monotone: c <= c2 implies H(c) <= H(c2);
  *  - symmetry: |H(c) + H(-c) - 1| <= DBL_EPSILON (asin is odd). */
+#include "asin_ref.h"
 #include "fuzz_common.h"
 
 #define H_TOL (3.0 * DBL_EPSILON + 16.0 * LDBL_EPSILON)
-
-/* asin(x) for |x| <= 1/2: Taylor series, term ratio < 1/4, 40 terms (1e-24). */
-static long double asin_series(long double x)
-{
-    long double term = x, sum = x;
-    const long double x2 = x * x;
-    for (int n = 1; n <= 40; ++n) {
-        term *= x2 * (2.0L * n - 1.0L) * (2.0L * n - 1.0L) / ((2.0L * n) * (2.0L * n + 1.0L));
-        sum += term;
-    }
-    return sum;
-}
-
-static long double asin_ref(double c)
-{
-    const long double ac = fabsl((long double)c);
-    if (ac <= 0.5L) return asin_series(c);
-    const long double r = 1.570796326794896619231321691639751442L - 2.0L * asin_series(sqrtl((1.0L - ac) / 2.0L));
-    return c < 0.0 ? -r : r;
-}
 
 static long double h_ref(double c, double a)
 {
