@@ -223,7 +223,7 @@ uninstall:
 clean:
 	rm -rf $(BUILD)
 
-# ---- robustness: libFuzzer targets (tests/fuzz/) and the stress run (tools/stress.c) ----
+# ---- robustness: libFuzzer targets (tests/fuzz/) and the stress run (tests/stress/) ----
 # make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="fuzz_polygon ..."] [FUZZ_FLAGS=...]:
 # builds every tests/fuzz/fuzz_*.c with clang and -fsanitize=fuzzer,address,undefined,
 # linked with the library objects built with the same sanitizers and the allocation
@@ -276,16 +276,16 @@ fuzz-repro: fuzz-build
 	done
 
 # make stress [STRESS_N=10000000] [STRESS_THREADS=2]: random and near-degenerate polygons
-# and spheres over lmax 0..30 in double and float (tools/stress.c); prints the count of
+# and spheres over lmax 0..30 in double and float (tests/stress/stress.c); prints the count of
 # non-finite outputs and the worst errors against the quadrature references.
 STRESS_N       ?= 10000000
 STRESS_THREADS ?= 2
-stress: $(BUILD)/tools/stress
-	$(BUILD)/tools/stress $(STRESS_N) $(STRESS_THREADS)
+stress: $(BUILD)/tests/stress/stress
+	$(BUILD)/tests/stress/stress $(STRESS_N) $(STRESS_THREADS)
 
-$(BUILD)/tools/stress: tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) $(wildcard tests/*.h)
+$(BUILD)/tests/stress/stress: tests/stress/stress.c tests/ref_quad.c tests/capref.c $(STATIC) $(wildcard tests/*.h)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_ALL) -Itests $(LDFLAGS) -o $@ tools/stress.c tests/ref_quad.c tests/capref.c $(STATIC) $(LDLIBS)
+	$(CC) $(CFLAGS_ALL) -Itests $(LDFLAGS) -o $@ tests/stress/stress.c tests/ref_quad.c tests/capref.c $(STATIC) $(LDLIBS)
 
 # ---- Python tools: Mitsuba 3 / Dr.Jit accuracy oracle (tools/oracle.py, bench/ORACLE.md), plots ----
 # venv: build/venv from tools/requirements.txt (Mitsuba, Dr.Jit, numpy, pillow); venv-plot:

@@ -6,7 +6,8 @@
  *  - shl_sphere / shl_sphere_grad (double, float) time vs lmax 2..30 and the
  *    gradient / coefficient time ratio.
  * CSV: build/bench/bench_sphere.csv (-o overrides); --help. */
-#include "sh_ops.h"
+#include "sh_basis.h"
+#include "sphere.h"
 #include "shlight.h"
 #include "util.h"
 #include <math.h>

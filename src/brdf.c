@@ -12,7 +12,9 @@
  * towards phi = pi with the lobe's azimuthal width at that theta and towards the
  * cut-off circle.  The horizon theta = pi/2 is a panel end, so the cut-off of F'
  * costs no accuracy. */
-#include "sh_ops.h"
+#include "sh_basis.h"
+#include "quad.h"
+#include "brdf.h"
 
 enum { NT = 20, NP = 16 }; /* Gauss-Legendre nodes per theta / phi panel */
 static int check_brdf(const shl_brdf *b)

@@ -1,7 +1,9 @@
 /* Harmonics Virtual Lights (Mezieres et al. 2022, Sec. 5): the contribution of
  * a set of HVLs at a shading point (Eq. 19-22) and the two radius heuristics
  * (Eq. 23-26). */
-#include "sh_ops.h"
+#include "sh_basis.h"
+#include "sphere.h"
+#include "brdf.h"
 #include <limits.h>
 
 /* S(w) = 3 w^2 - 2 w^3 for 2^-50 <= w <= 1/2, to within 2^-100 relative before

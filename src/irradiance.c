@@ -6,7 +6,7 @@
  * Polygon geometry follows polygon.c: repeated vertices dropped, coordinates
  * taken relative to x and scaled by a power of two (internal.h), a point in the
  * polygon's plane (within a few ulps of the distances) sees nothing. */
-#include "sh_ops.h"
+#include "quad.h"
 #include <float.h>
 
 enum { MAXV = 2 * SHL_MAX_VERTS, /* clipping adds at most one vertex per edge */

@@ -6,7 +6,7 @@
  * Spheres (HVL Sec. 4.2) produce the same lobe integrals by Funk-Hecke. */
 #include "lights.h"
 #include "polygon.h"
-#include "sh_ops.h"
+#include "sphere.h"
 #include "zh_tables.h"
 #include <limits.h>
 #include <stdint.h>
@@ -75,7 +75,7 @@ static void sphere_zh(const shl__light *li, int lmax, const double x[3], double 
         for (int l = 0; l <= lmax; ++l) {
             out[l] = kw[l] * p;
             const double radial = kdw[l] * p, tang = kw[l] * dp;
-            for (int a = 0; a < 3; ++a) /* back from scaled units (sh_ops.h) */
+            for (int a = 0; a < 3; ++a) /* back from scaled units (internal.h) */
                 og[a * SHL__ZH_BLOCK + l] = (-radial * g.u[a] - tang * tan_dir[a]) * g.grad_scale[0] * g.grad_scale[1];
             const double p_next = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
             const double dp_next = dp_prev + (2.0 * l + 1.0) * p; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */

@@ -2,7 +2,7 @@
  * Wang & Ramamoorthi 2018 (Sec. 4.1).  The recurrence is written once in
  * polygon_zh.h and instantiated for double and float. */
 #include "polygon.h"
-#include "sh_ops.h"
+#include "quad.h"
 #include "zh_tables.h"
 #include <float.h>
 #include <math.h>
@@ -550,4 +550,99 @@ void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh
     shl__poly_zh_grad_d(g, lmax, zd, zd + SHL__ZH_BLOCK);
     round_block(lmax, zd, zh);
     for (int a = 0; a < 3; ++a) round_block(lmax, zd + (a + 1) * SHL__ZH_BLOCK, zh_grad + a * SHL__ZH_BLOCK);
+}
+
+/* ---- public entry points: every check before any output is written ---- */
+
+static int check_polygon_args(const void *x, const void *verts, int n, const void *out)
+{
+    if (!x || !verts || !out) return SHL_ENULL;
+    if (n < 3 || n > SHL_MAX_VERTS) return SHL_ENVERTS;
+    return SHL_OK;
+}
+
+int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int n, double *coeffs)
+{
+    if (!ctx) return SHL_ENULL;
+    int st = check_polygon_args(x, verts, n, coeffs);
+    if (st) return st;
+    if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
+    shl__poly_geom g;
+    double zh[SHL__ZH_BLOCK];
+    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_zh_d(&g, ctx->lmax, zh);
+    shl__zh_to_sh(ctx->lmax, zh, coeffs);
+    return SHL_OK;
+}
+
+/* Float entry points: the geometry is set up in double from the float input,
+ * the recurrences run in float (the near-plane planar rule in double, polygon.c),
+ * the ZH -> SH reconstruction accumulates in double. */
+static int float_polygon_input(const float x[3], const float *verts, int n, double xd[3], double *vd)
+{
+    if (shl__check_finite_f(x, 3) || shl__check_finite_f(verts, 3 * n)) return SHL_ENONFINITE;
+    for (int k = 0; k < 3; ++k) xd[k] = x[k];
+    for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
+    return SHL_OK;
+}
+
+int shl_polygon_f(const shl_ctx *ctx, const float x[3], const float *verts, int n, float *coeffs)
+{
+    if (!ctx) return SHL_ENULL;
+    int st = check_polygon_args(x, verts, n, coeffs);
+    double xd[3], vd[3 * SHL_MAX_VERTS];
+    if (!st) st = float_polygon_input(x, verts, n, xd, vd);
+    if (st) return st;
+    shl__poly_geom g;
+    float zh[SHL__ZH_BLOCK];
+    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_zh_f(&g, ctx->lmax, zh);
+    shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
+    return SHL_OK;
+}
+
+int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts, int n,
+                     double *coeffs, double *grad)
+{
+    if (!ctx || !grad) return SHL_ENULL;
+    int st = check_polygon_args(x, verts, n, coeffs);
+    if (st) return st;
+    if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
+    shl__poly_geom g;
+    double zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
+    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_zh_grad_d(&g, ctx->lmax, zh, zh_grad);
+    shl__zh_to_sh(ctx->lmax, zh, coeffs);
+    for (int a = 0; a < 3; ++a) shl__zh_to_sh(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    shl__poly_grad_unscale(&g, grad, 3 * ctx->nc);
+    return SHL_OK;
+}
+
+int shl_polygon_grad_f(const shl_ctx *ctx, const float x[3], const float *verts, int n,
+                       float *coeffs, float *grad)
+{
+    if (!ctx || !grad) return SHL_ENULL;
+    int st = check_polygon_args(x, verts, n, coeffs);
+    double xd[3], vd[3 * SHL_MAX_VERTS];
+    if (!st) st = float_polygon_input(x, verts, n, xd, vd);
+    if (st) return st;
+    shl__poly_geom g;
+    float zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
+    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_zh_grad_f(&g, ctx->lmax, zh, zh_grad);
+    shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
+    for (int a = 0; a < 3; ++a) shl__zh_to_sh_f(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    shl__poly_grad_unscale_f(&g, grad, 3 * ctx->nc);
+    return SHL_OK;
+}
+
+int shl_polygon_solid_angle(const double x[3], const double *verts, int n, double *omega)
+{
+    int st = check_polygon_args(x, verts, n, omega);
+    if (st) return st;
+    if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
+    shl__poly_geom g;
+    shl__poly_geom_init(&g, x, verts, n);
+    *omega = g.solid_angle;
+    return SHL_OK;
 }

@@ -1,6 +1,6 @@
 /* Gauss-Legendre quadrature on panels, used to project lobes (GGX kernel, BRDF
  * tables) whose width can be far below the resolution of any fixed rule. */
-#include "sh_ops.h"
+#include "quad.h"
 
 void shl__gauss_legendre(int n, double *x, double *w)
 {

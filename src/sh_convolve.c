@@ -1,6 +1,6 @@
 /* Convolution of SH lighting with circularly symmetric kernels (full SH, O(n^2),
  * and ZH x ZH, O(n): HVL Sec. 6.3 / App. B), and the ZH of three kernels. */
-#include "sh_ops.h"
+#include "quad.h"
 
 static double band_k(int l) { return sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); } /* K_l */
 

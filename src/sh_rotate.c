@@ -6,7 +6,8 @@
  * and D_{l-1} in O(1) per entry, O(lmax^3) in all.  The recurrences are written
  * for real SH without the Condon-Shortley phase, where D_1 is R in (y, z, x)
  * order; our basis differs by the sign (-1)^m, so D_l[m][n] gets (-1)^(m+n). */
-#include "sh_ops.h"
+#include "sh_basis.h"
+#include "sh_rotate.h"
 #include <stdlib.h>
 
 static size_t band_offset(int l) { return (size_t)l * (2 * l - 1) * (2 * l + 1) / 3; }

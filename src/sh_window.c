@@ -1,7 +1,7 @@
 /* SH windowing against ringing: per-band factors h_l (Hanning, Lanczos sigma,
  * Laplacian penalty of Sloan 2008, spherical de la Vallee Poussin), formulas in
  * include/shlight.h. */
-#include "sh_ops.h"
+#include "internal.h"
 
 int shl_sh_window_factors(int lmax, int window, double param, double *h)
 {

@@ -1,7 +1,7 @@
 /* Spherical lights (Mezieres et al. 2022, HVL Sec. 4.2): the SH projection of
  * the cap subtended by a sphere, its gradient, and the public entry points.
  * The kernels are in sphere_impl.h, instantiated for double and float. */
-#include "sh_ops.h"
+#include "sphere.h"
 
 #define REAL double
 #define SUFFIX(name) name##_d

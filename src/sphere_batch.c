@@ -2,7 +2,7 @@
  * (simd/sphere_batch.h) over all points.  Light sets (src/lights_batch.c)
  * share shl__batch_sphere_eval. */
 #include "parallel.h"
-#include "sh_ops.h"
+#include "sphere.h"
 #include <math.h>
 
 /* The kernel sets each lane's cap up in double without rescaling, and stores

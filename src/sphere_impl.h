@@ -48,6 +48,6 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
     for (int l = 0; l <= lmax; ++l) al[l] = -w[l] * inv_d, be[l] = -ka * dw[l];
     SUFFIX(shl__sh_eval_wgrad)(lmax, u, w, al, be, coeffs, grad, nc);
     if (g->grad_scale[0] != 1.0 || g->grad_scale[1] != 1.0)
-        for (int k = 0; k < 3 * nc; ++k) /* back from scaled units in double (sh_ops.h) */
+        for (int k = 0; k < 3 * nc; ++k) /* back from scaled units in double (internal.h) */
             grad[k] = (REAL)(grad[k] * g->grad_scale[0] * g->grad_scale[1]);
 }

@@ -10,6 +10,7 @@
  * away is not blurred by the frame's rounding. */
 #include "ref_quad.h"
 #include "internal.h"
+#include "sh_basis.h"
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>

@@ -6,6 +6,7 @@
 #include "harness.h"
 #include "internal.h"
 #include "ref_quad.h"
+#include "sh_basis.h"
 #include <math.h>
 #include <string.h>
 #include <time.h>

@@ -4,7 +4,7 @@
  * long double evaluation at every lmax, in double, float and weighted form. */
 #include "harness.h"
 #include "ref_quad.h"
-#include "sh_ops.h"
+#include "sh_basis.h"
 #include "testutil.h"
 #include <float.h>
 #include <math.h>

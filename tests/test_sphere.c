@@ -3,7 +3,7 @@
  * paths, the analytic SH gradient, bad input. */
 #include "capref.h"
 #include "harness.h"
-#include "sh_ops.h"
+#include "sh_basis.h"
 #include "testutil.h"
 #include <math.h>
 

@@ -4,6 +4,7 @@
 #include "internal.h"
 #include "testutil.h"
 #include "zh_tables.h"
+#include "sh_basis.h"
 #include <math.h>
 
 #define LMAX SHL_LMAX_MAX

@@ -13,6 +13,7 @@
  * search is deterministic. */
 #include "internal.h"
 #include "zh_tables.h"
+#include "sh_basis.h"
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

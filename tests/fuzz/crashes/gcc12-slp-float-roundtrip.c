@@ -4,7 +4,7 @@
  * prints x 0x1.4802d606cbd67p+0 instead of 0x1.4802d6p+0; -O0, -fno-tree-slp-vectorize
  * and clang give the rounded value.  tests/test_polygon.c (polygon_float_vs_reference)
  * and tests/test_sphere.c (sphere_float_random) used this idiom to build their
- * float-rounded references; they, the fuzz targets and tools/stress.c now round
+ * float-rounded references; they, the fuzz targets and tests/stress/stress.c now round
  * through a volatile float (round_to_float, fz_to_float). */
 #include <stdio.h>
 __attribute__((noinline)) void use(const float *xf, const float *vf, const double *x, const double *v) { printf("x %a (float %a) v %a (float %a)\n", x[0], (double)xf[0], v[0], (double)vf[0]); }

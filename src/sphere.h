@@ -1,0 +1,34 @@
+/* Internal declarations of spherical caps and lights (sphere.c). */
+#ifndef SHL_SPHERE_H
+#define SHL_SPHERE_H
+
+#include "internal.h"
+#include "sh_basis.h"
+
+/* Funk-Hecke factors of the cap {w : axis . w >= cos a}: the integral of Y_lm
+ * over it is w[l] Y_lm(axis), w[l] = 2 pi int_{cos a}^1 P_l(u) du (its ZH is
+ * K_l w[l]).  t = 1 - cos a, s2 = sin^2 a and c = cos a are passed separately,
+ * each with full relative accuracy.  dw (optional) = d w[l] / d cos a. */
+void shl__cap_weights_d(int lmax, double t, double s2, double c, double *w, double *dw);
+void shl__cap_weights_f(int lmax, float t, float s2, float c, float *w, float *dw);
+
+/* A sphere seen from a point, set up in double. */
+typedef struct {
+    int inside;        /* |center - x| <= radius: the whole sphere of directions */
+    double u[3];       /* unit axis, towards the centre                           */
+    double t, s2, c;   /* 1 - cos a, sin^2 a, cos a                               */
+    double k_alpha;    /* d cos a / dx = -k_alpha u                               */
+    double inv_d;      /* 1 / |center - x|: d u / dx = -(I - u u^T) inv_d           */
+    /* the same in scaled units (internal.h): center - x times 2^-e, largest component
+     * in [1, 2); k_alpha = k_alpha_s 2^-e, inv_d = inv_d_s 2^-e (inf only if beyond DBL_MAX) */
+    double k_alpha_s, inv_d_s;
+    double grad_scale[2]; /* product 2^-e (shl__pow2_split) */
+} shl__sphere_geom;
+
+void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
+                           double radius);
+/* SH of the cap (and, when grad != NULL, d/dx with grad[a*nc + k]). */
+void shl__sphere_sh_d(int lmax, const shl__sphere_geom *g, double *coeffs, double *grad);
+void shl__sphere_sh_f(int lmax, const shl__sphere_geom *g, float *coeffs, float *grad);
+
+#endif
