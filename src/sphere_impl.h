@@ -23,23 +23,110 @@ void SUFFIX(shl__cap_weights)(int lmax, REAL t, REAL s2, REAL c, REAL *w, REAL *
     }
 }
 
+/* lmax <= SHL__SPHERE_SMALL without gradient: shl__cap_weights and shl__sh_eval_w
+ * with lmax a compile-time constant L (one instance per L, chosen in shl__sphere_sh)
+ * and every loop unrolled, so that each value lives in a register: no calls, loop
+ * control or stores but the outputs (at low lmax these, not the arithmetic, were
+ * most of the time).  Each value is formed by the same operations in the same order
+ * as there (HVL Eq. (13)-(15); recurrences of sh_basis_impl.h), so the coefficients
+ * equal the general path's bit for bit. */
+static SHL__ALWAYS_INLINE void SUFFIX(sphere_small)(const int L, const REAL u[3], REAL t, REAL s2, REAL c,
+                                                    REAL *restrict y)
+{
+    enum { S = SHL__SPHERE_SMALL };
+    const REAL x = u[0], yy = u[1], z = u[2], r2 = (REAL)M_SQRT2;
+    REAL w[S + 1], sc[S + 1], ss[S + 1], q[S + 1][S + 1];
+    w[0] = (REAL)(2.0 * M_PI) * t;
+    REAL p_prev = 1, p = c, dp_prev = 0, dp = 1;
+#pragma GCC unroll 16
+    for (int l = 1; l <= L; ++l) {
+        w[l] = TAB(capk)[l] * s2 * dp;
+        const REAL p_next = TAB(lega)[l] * c * p - TAB(legb)[l] * p_prev;
+        const REAL dp_next = dp_prev + (REAL)(2 * l + 1) * p;
+        p_prev = p, p = p_next, dp_prev = dp, dp = dp_next;
+    }
+    REAL cm = 1, sm = 0;
+#pragma GCC unroll 16
+    for (int m = 1; m <= L; ++m) {
+        const REAL cn = cm * x - sm * yy;
+        sm = cm * yy + sm * x, cm = cn, sc[m] = r2 * cm, ss[m] = r2 * sm;
+    }
+    q[0][0] = TAB(diag)[0];
+    y[0] = w[0] * q[0][0];
+#pragma GCC unroll 16
+    for (int l = 1; l <= L; ++l) {
+        const REAL *a = TAB(a) + l * (l + 1) / 2, *b = TAB(b) + l * (l + 1) / 2;
+        REAL *restrict yc = y + l * (l + 1);
+#pragma GCC unroll 16
+        for (int m = 0; m <= l; ++m)
+            q[l][m] = m == l ? TAB(diag)[l] : m == l - 1 ? a[m] * z * q[l - 1][m]
+                                                          : a[m] * (z * q[l - 1][m] - b[m] * q[l - 2][m]);
+        yc[0] = w[l] * q[l][0];
+#pragma GCC unroll 16
+        for (int m = 1; m <= l; ++m) {
+            const REAL v = w[l] * q[l][m];
+            yc[m] = v * sc[m], yc[-m] = v * ss[m];
+        }
+    }
+}
+
+/* Coefficients only, from the geometry's values (never its address, so that a
+ * caller's geometry can stay in registers); out of line: the inside case and bands
+ * above SHL__SPHERE_SMALL. */
+static SHL__NOINLINE void SUFFIX(sphere_inside)(int lmax, REAL *coeffs)
+{
+    for (int k = 0; k < SHL_NCOEFFS(lmax); ++k) coeffs[k] = 0;
+    coeffs[0] = (REAL)sqrt(4.0 * M_PI);
+}
+
+static SHL__NOINLINE void SUFFIX(sphere_value_general)(int lmax, REAL ux, REAL uy, REAL uz, REAL t, REAL s2, REAL c,
+                                                       REAL *coeffs)
+{
+    REAL w[SHL_LMAX_MAX + 1];
+    const REAL u[3] = {ux, uy, uz};
+    SUFFIX(shl__cap_weights)(lmax, t, s2, c, w, NULL);
+    SUFFIX(shl__sh_eval_w)(lmax, u, w, coeffs); /* HVL Eq. (15): w_l Y_lm(axis) */
+}
+
+/* The coefficients of shl__sphere_sh (no gradient), inlined into the entry points. */
+static SHL__ALWAYS_INLINE void SUFFIX(sphere_value)(int lmax, const shl__sphere_geom *g, REAL *coeffs)
+{
+    if (g->inside) {
+        SUFFIX(sphere_inside)(lmax, coeffs);
+        return;
+    }
+    const REAL ux = (REAL)g->u[0], uy = (REAL)g->u[1], uz = (REAL)g->u[2];
+    const REAL t = (REAL)g->t, s2 = (REAL)g->s2, c = (REAL)g->c;
+    if (lmax > SHL__SPHERE_SMALL) {
+        SUFFIX(sphere_value_general)(lmax, ux, uy, uz, t, s2, c, coeffs);
+        return;
+    }
+    const REAL u[3] = {ux, uy, uz};
+    switch (lmax) {
+    case 0: SUFFIX(sphere_small)(0, u, t, s2, c, coeffs); return;
+    case 1: SUFFIX(sphere_small)(1, u, t, s2, c, coeffs); return;
+    case 2: SUFFIX(sphere_small)(2, u, t, s2, c, coeffs); return;
+    case 3: SUFFIX(sphere_small)(3, u, t, s2, c, coeffs); return;
+    case 4: SUFFIX(sphere_small)(4, u, t, s2, c, coeffs); return;
+    default: SUFFIX(sphere_small)(5, u, t, s2, c, coeffs); return;
+    }
+}
+
 void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, REAL *grad)
 {
+    if (!grad) {
+        SUFFIX(sphere_value)(lmax, g, coeffs);
+        return;
+    }
     const int nc = SHL_NCOEFFS(lmax);
     if (g->inside) {
-        for (int k = 0; k < nc; ++k) coeffs[k] = 0;
-        coeffs[0] = (REAL)sqrt(4.0 * M_PI);
-        if (grad)
-            for (int k = 0; k < 3 * nc; ++k) grad[k] = 0;
+        SUFFIX(sphere_inside)(lmax, coeffs);
+        for (int k = 0; k < 3 * nc; ++k) grad[k] = 0;
         return;
     }
     REAL w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1];
     const REAL u[3] = {(REAL)g->u[0], (REAL)g->u[1], (REAL)g->u[2]};
-    SUFFIX(shl__cap_weights)(lmax, (REAL)g->t, (REAL)g->s2, (REAL)g->c, w, grad ? dw : NULL);
-    if (!grad) {
-        SUFFIX(shl__sh_eval_w)(lmax, u, w, coeffs); /* HVL Eq. (15): w_l Y_lm(axis) */
-        return;
-    }
+    SUFFIX(shl__cap_weights)(lmax, (REAL)g->t, (REAL)g->s2, (REAL)g->c, w, dw);
     /* d/dx [w_l(cos a) Y(u)] = w_l' (d cos a/dx) Y - (w_l / d) (I - u u^T) grad Y with
      * d cos a/dx = -k_alpha u (HVL Eq. (15) differentiated): al = -w_l / d, be = -k_alpha w_l'
      * in shl__sh_eval_wgrad, which forms coefficients and gradient in one pass */
