@@ -84,7 +84,15 @@ static SHL__NOINLINE void SUFFIX(sphere_value_general)(int lmax, REAL ux, REAL u
 {
     REAL w[SHL_LMAX_MAX + 1];
     const REAL u[3] = {ux, uy, uz};
-    SUFFIX(shl__cap_weights)(lmax, t, s2, c, w, NULL);
+    /* shl__cap_weights without dw, step for step (the same values) */
+    w[0] = (REAL)(2.0 * M_PI) * t;
+    REAL p_prev = 1, p = c, dp_prev = 0, dp = 1, two_l1 = 3; /* two_l1 = 2l + 1, exact */
+    for (int l = 1; l <= lmax; ++l) {
+        w[l] = TAB(capk)[l] * s2 * dp;
+        const REAL p_next = TAB(lega)[l] * c * p - TAB(legb)[l] * p_prev;
+        const REAL dp_next = dp_prev + two_l1 * p;
+        p_prev = p, p = p_next, dp_prev = dp, dp = dp_next, two_l1 += 2;
+    }
     SUFFIX(shl__sh_eval_w)(lmax, u, w, coeffs); /* HVL Eq. (15): w_l Y_lm(axis) */
 }
 
