@@ -111,58 +111,55 @@ static int check_radius(double radius)
     return radius > 0.0 ? SHL_OK : SHL_EDOMAIN;
 }
 
-/* Coefficients without gradient when moderate() holds (which implies finite x and
- * centre and a finite radius > 0): no further check, no scaling, and the geometry
- * goes to the kernels in registers (its address is never taken).  Returns 0 if
- * not moderate (nothing written). */
-static SHL__ALWAYS_INLINE int sphere_value_fast_d(int lmax, const double x[3], const double center[3],
-                                                  double radius, double *coeffs)
-{
-    const double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
-    if (!moderate(vs, radius)) return 0;
-    shl__sphere_geom g;
-    geom_units(&g, vs, radius);
-    sphere_value_d(lmax, &g, coeffs);
-    return 1;
-}
-
-static SHL__ALWAYS_INLINE int sphere_value_fast_f(int lmax, const double x[3], const double center[3],
-                                                  double radius, float *coeffs)
-{
-    const double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
-    if (!moderate(vs, radius)) return 0;
-    shl__sphere_geom g;
-    geom_units(&g, vs, radius);
-    sphere_value_f(lmax, &g, coeffs);
-    return 1;
-}
-
+/* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
+ * so in the common case no further check is needed; coefficients without gradient
+ * then need no scaling either, and their geometry goes to the kernels in registers
+ * (the address of g is never taken). */
 static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
                                        double *coeffs, double *grad, int want_grad)
 {
     if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
-    if (!want_grad && sphere_value_fast_d(ctx->lmax, x, center, radius, coeffs)) return SHL_OK;
-    if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
-    const int st = check_radius(radius);
-    if (st) return st;
-    shl__sphere_geom g;
-    shl__sphere_geom_init(&g, x, center, radius);
-    shl__sphere_sh_d(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    const double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    const int mod = moderate(vs, radius);
+    if (mod && !want_grad) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_value_d(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (!mod) {
+        if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
+    shl__sphere_geom gs;
+    shl__sphere_geom_init(&gs, x, center, radius);
+    shl__sphere_sh_d(ctx->lmax, &gs, coeffs, want_grad ? grad : NULL);
     return SHL_OK;
 }
 
+/* As sphere_d; the geometry in double from the float arguments (exact). */
 static SHL__ALWAYS_INLINE int sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
                                        float *coeffs, float *grad, int want_grad)
 {
     if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
     const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
-    if (!want_grad && sphere_value_fast_f(ctx->lmax, xd, cd, radius, coeffs)) return SHL_OK;
-    if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
-    const int st = check_radius(radius);
-    if (st) return st;
-    shl__sphere_geom g;
-    shl__sphere_geom_init(&g, xd, cd, radius);
-    shl__sphere_sh_f(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    const double vs[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
+    const int mod = moderate(vs, radius);
+    if (mod && !want_grad) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_value_f(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (!mod) {
+        if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
+    shl__sphere_geom gs;
+    shl__sphere_geom_init(&gs, xd, cd, radius);
+    shl__sphere_sh_f(ctx->lmax, &gs, coeffs, want_grad ? grad : NULL);
     return SHL_OK;
 }
 

@@ -102,6 +102,62 @@ SHL_TEST(sphere_zh_cap_matches_eq14)
     harness_note("max |zh - Eq.14| %.1e for a >= 0.3", worst);
 }
 
+/* The coefficient paths: lmax <= 5 has unrolled kernels and moderate geometry a
+ * register-only set-up (src/sphere_impl.h, sphere.c); the general kernels, the
+ * scaled set-up (inputs times 2^+-200 in double, 2^+-110 in float, outside the
+ * moderate range; exact scalings) and shl_sphere_grad's coefficients must give the same values bit
+ * for bit (each path forms every value by the same operations); and lmax 2 and 5
+ * against the quadrature with the bound of sphere_random_vs_quadrature. */
+SHL_TEST(sphere_unrolled_and_scaled_paths_bit_identical)
+{
+    rng_t r = {21};
+    shl_ctx *big = ctx_or_die(L);
+    double worst = 0.0;
+    int bad = 0;
+    for (int lmax = 0; lmax <= 8; ++lmax) {
+        shl_ctx *ctx = ctx_or_die(lmax);
+        const int nc = SHL_NCOEFFS(lmax);
+        for (int it = 0; it < 25; ++it) {
+            double x[3], c[3], rad, a[NC], b[NC], g[3 * NC], want[NC];
+            float xf[3], cf[3], af[NC], bf[NC];
+            random_sphere(&r, x, c, &rad);
+            if (it % 5 == 0) rad *= 1e-6; /* small caps: t and s2 far from c */
+            for (int k = 0; k < 3; ++k) xf[k] = (float)x[k], cf[k] = (float)c[k];
+            CHECK(shl_sphere(ctx, x, c, rad, a) == SHL_OK && shl_sphere(big, x, c, rad, b) == SHL_OK);
+            bad += memcmp(a, b, (size_t)nc * sizeof a[0]) != 0;
+            CHECK(shl_sphere_grad(ctx, x, c, rad, b, g) == SHL_OK);
+            bad += memcmp(a, b, (size_t)nc * sizeof a[0]) != 0;
+            for (int sgn = -1; sgn <= 1; sgn += 2) {
+                double xs[3], cs[3];
+                for (int k = 0; k < 3; ++k) xs[k] = ldexp(x[k], 200 * sgn), cs[k] = ldexp(c[k], 200 * sgn);
+                CHECK(shl_sphere(ctx, xs, cs, ldexp(rad, 200 * sgn), b) == SHL_OK);
+                bad += memcmp(a, b, (size_t)nc * sizeof a[0]) != 0;
+            }
+            CHECK(shl_sphere_f(ctx, xf, cf, (float)rad, af) == SHL_OK);
+            CHECK(shl_sphere_f(big, xf, cf, (float)rad, bf) == SHL_OK);
+            bad += memcmp(af, bf, (size_t)nc * sizeof af[0]) != 0;
+            for (int sgn = -1; sgn <= 1; sgn += 2) {
+                float xs[3], cs[3];
+                if (sgn < 0 && it % 5 == 0) continue; /* the small radius would be a subnormal float */
+                for (int k = 0; k < 3; ++k) xs[k] = ldexpf(xf[k], 110 * sgn), cs[k] = ldexpf(cf[k], 110 * sgn);
+                CHECK(shl_sphere_f(ctx, xs, cs, ldexpf((float)rad, 110 * sgn), bf) == SHL_OK);
+                bad += memcmp(af, bf, (size_t)nc * sizeof af[0]) != 0;
+            }
+            if (lmax == 2 || lmax == 5) {
+                capref_sphere(lmax, x, c, rad, want);
+                worst = fmax(worst, rel_err(a, want, nc));
+            }
+        }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(bad == 0);
+    CHECK(worst < 2e-14);
+    harness_note("lmax 0..8, 25 spheres each: %d coefficient sets differ between paths; lmax 2, 5 vs quadrature "
+                 "max |err|/max|coeff| %.1e",
+                 bad, worst);
+    shl_ctx_destroy(big);
+}
+
 /* Reference ZH of a cap by Gauss-Legendre in q = 1 - u on [0, t]. */
 static void zh_cap_ref(int lmax, double t, double *zh)
 {
