@@ -112,9 +112,10 @@ static int check_radius(double radius)
 }
 
 /* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
- * so in the common case no further check is needed; coefficients without gradient
- * then need no scaling either, and their geometry goes to the kernels in registers
- * (the address of g is never taken). */
+ * so in the common case no further check is needed and no scaling (the exponent e
+ * of shl__sphere_geom_init is 0); coefficients without gradient, and with it up to
+ * band SHL__SPHERE_SMALL, then take their geometry to the kernels in registers (the
+ * address of g is never taken). */
 static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
                                        double *coeffs, double *grad, int want_grad)
 {
@@ -125,6 +126,12 @@ static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], co
         shl__sphere_geom g;
         geom_units(&g, vs, radius);
         sphere_value_d(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_grad_small_d(ctx->lmax, &g, coeffs, grad);
         return SHL_OK;
     }
     if (!mod) {
@@ -150,6 +157,12 @@ static SHL__ALWAYS_INLINE int sphere_f(const shl_ctx *ctx, const float x[3], con
         shl__sphere_geom g;
         geom_units(&g, vs, radius);
         sphere_value_f(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_grad_small_f(ctx->lmax, &g, coeffs, grad);
         return SHL_OK;
     }
     if (!mod) {

@@ -70,6 +70,80 @@ static SHL__ALWAYS_INLINE void SUFFIX(sphere_small)(const int L, const REAL u[3]
     }
 }
 
+/* lmax <= SHL__SPHERE_SMALL with the gradient, unscaled geometry: shl__cap_weights,
+ * the factors al, be of shl__sphere_sh and shl__sh_eval_wgrad (see there for the
+ * formulas) with lmax a compile-time constant and every loop unrolled, as
+ * sphere_small: the same operations in the same order, so the same values bit for
+ * bit.  inv_d = 1 / |center - x|, ka = k_alpha (shl__sphere_geom). */
+static SHL__ALWAYS_INLINE void SUFFIX(sphere_small_grad)(const int L, const REAL u[3], REAL t, REAL s2, REAL c,
+                                                         REAL inv_d, REAL ka, REAL *restrict y, REAL *restrict grad)
+{
+    enum { S = SHL__SPHERE_SMALL };
+    const int nc = (L + 1) * (L + 1);
+    const REAL x = u[0], yy = u[1], z = u[2], r2 = (REAL)M_SQRT2, two_pi = (REAL)(2.0 * M_PI);
+    REAL w[S + 1], dw[S + 1], al[S + 1], be[S + 1], sc[S + 1], ss[S + 1], q[S + 1][S + 2];
+    REAL *restrict gx = grad, *restrict gy = grad + nc, *restrict gz = grad + 2 * nc;
+    w[0] = two_pi * t;
+    dw[0] = -two_pi;
+    REAL p_prev = 1, p = c, dp_prev = 0, dp = 1;
+#pragma GCC unroll 16
+    for (int l = 1; l <= L; ++l) {
+        w[l] = TAB(capk)[l] * s2 * dp;
+        dw[l] = -two_pi * p;
+        const REAL p_next = TAB(lega)[l] * c * p - TAB(legb)[l] * p_prev;
+        const REAL dp_next = dp_prev + (REAL)(2 * l + 1) * p;
+        p_prev = p, p = p_next, dp_prev = dp, dp = dp_next;
+    }
+#pragma GCC unroll 16
+    for (int l = 0; l <= L; ++l) al[l] = -w[l] * inv_d, be[l] = -ka * dw[l];
+    REAL cm = 1, sm = 0;
+    sc[0] = r2, ss[0] = 0;
+#pragma GCC unroll 16
+    for (int m = 1; m <= L; ++m) {
+        const REAL cn = cm * x - sm * yy;
+        sm = cm * yy + sm * x, cm = cn, sc[m] = r2 * cm, ss[m] = r2 * sm;
+    }
+    q[0][0] = TAB(diag)[0];
+    {
+        const REAL r = be[0] * q[0][0];
+        y[0] = w[0] * q[0][0];
+        gx[0] = x * r, gy[0] = yy * r, gz[0] = z * r;
+    }
+#pragma GCC unroll 16
+    for (int l = 1; l <= L; ++l) {
+        const int base = l * (l + 1);
+        const REAL *ta = TAB(a) + l * (l + 1) / 2, *tb = TAB(b) + l * (l + 1) / 2, *dz = TAB(dz) + l * (l + 1) / 2;
+#pragma GCC unroll 16
+        for (int m = 0; m <= l; ++m)
+            q[l][m] = m == l ? TAB(diag)[l] : m == l - 1 ? ta[m] * z * q[l - 1][m]
+                                                          : ta[m] * (z * q[l - 1][m] - tb[m] * q[l - 2][m]);
+        q[l][l + 1] = 0;
+        const REAL wl = w[l], a = al[l], b = be[l];
+        {
+            const REAL n = q[l][0], d = dz[0] * q[l][1], r = b * n - a * (z * d);
+            y[base] = wl * n;
+            gx[base] = x * r, gy[base] = yy * r, gz[base] = a * d + z * r;
+        }
+#pragma GCC unroll 16
+        for (int m = 1; m <= l; ++m) {
+            const REAL n = q[l][m], v = wl * n, pm = a * n * TAB(mval)[m];
+            if (m <= 2 * (l / 2)) {
+                const REAL d = dz[m] * q[l][m + 1], r = b * n - (pm + a * (z * d)), h = a * d + z * r;
+                const REAL rx = x * r, ry = yy * r;
+                gz[base + m] = h * sc[m], gz[base - m] = h * ss[m];
+                gx[base + m] = pm * sc[m - 1] + rx * sc[m], gx[base - m] = pm * ss[m - 1] + rx * ss[m];
+                gy[base + m] = ry * sc[m] - pm * ss[m - 1], gy[base - m] = pm * sc[m - 1] + ry * ss[m];
+            } else { /* m = l odd: dN/dz = 0 */
+                const REAL r = b * n - pm, rx = x * r, ry = yy * r;
+                gz[base + m] = z * r * sc[m], gz[base - m] = z * r * ss[m];
+                gx[base + m] = pm * sc[m - 1] + rx * sc[m], gx[base - m] = pm * ss[m - 1] + rx * ss[m];
+                gy[base + m] = ry * sc[m] - pm * ss[m - 1], gy[base - m] = pm * sc[m - 1] + ry * ss[m];
+            }
+            y[base + m] = v * sc[m], y[base - m] = v * ss[m];
+        }
+    }
+}
+
 /* Coefficients only, from the geometry's values (never its address, so that a
  * caller's geometry can stay in registers); out of line: the inside case and bands
  * above SHL__SPHERE_SMALL. */
@@ -120,6 +194,34 @@ static SHL__ALWAYS_INLINE void SUFFIX(sphere_value)(int lmax, const shl__sphere_
     }
 }
 
+static SHL__NOINLINE void SUFFIX(sphere_inside_grad)(int lmax, REAL *coeffs, REAL *grad)
+{
+    SUFFIX(sphere_inside)(lmax, coeffs);
+    for (int k = 0; k < 3 * SHL_NCOEFFS(lmax); ++k) grad[k] = 0;
+}
+
+/* shl__sphere_sh with the gradient for lmax <= SHL__SPHERE_SMALL and unscaled
+ * geometry (grad_scale 1), inlined into the entry points. */
+static SHL__ALWAYS_INLINE void SUFFIX(sphere_grad_small)(int lmax, const shl__sphere_geom *g, REAL *coeffs,
+                                                         REAL *grad)
+{
+    if (g->inside) {
+        SUFFIX(sphere_inside_grad)(lmax, coeffs, grad);
+        return;
+    }
+    const REAL u[3] = {(REAL)g->u[0], (REAL)g->u[1], (REAL)g->u[2]};
+    const REAL t = (REAL)g->t, s2 = (REAL)g->s2, c = (REAL)g->c, inv_d = (REAL)g->inv_d_s;
+    const REAL ka = (REAL)(g->s2 / g->c * g->inv_d_s); /* k_alpha_s of shl__sphere_geom_init */
+    switch (lmax) {
+    case 0: SUFFIX(sphere_small_grad)(0, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    case 1: SUFFIX(sphere_small_grad)(1, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    case 2: SUFFIX(sphere_small_grad)(2, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    case 3: SUFFIX(sphere_small_grad)(3, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    case 4: SUFFIX(sphere_small_grad)(4, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    default: SUFFIX(sphere_small_grad)(5, u, t, s2, c, inv_d, ka, coeffs, grad); return;
+    }
+}
+
 void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, REAL *grad)
 {
     if (!grad) {
@@ -128,8 +230,7 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
     }
     const int nc = SHL_NCOEFFS(lmax);
     if (g->inside) {
-        SUFFIX(sphere_inside)(lmax, coeffs);
-        for (int k = 0; k < 3 * nc; ++k) grad[k] = 0;
+        SUFFIX(sphere_inside_grad)(lmax, coeffs, grad);
         return;
     }
     REAL w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1];
@@ -140,7 +241,8 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
      * in shl__sh_eval_wgrad, which forms coefficients and gradient in one pass */
     REAL al[SHL_LMAX_MAX + 1], be[SHL_LMAX_MAX + 1];
     const REAL inv_d = (REAL)g->inv_d_s, ka = (REAL)g->k_alpha_s;
-    for (int l = 0; l <= lmax; ++l) al[l] = -w[l] * inv_d, be[l] = -ka * dw[l];
+    al[0] = -w[0] * inv_d, be[0] = -ka * dw[0]; /* (band 0 outside the loop: lmax >= 0 unknown to gcc) */
+    for (int l = 1; l <= lmax; ++l) al[l] = -w[l] * inv_d, be[l] = -ka * dw[l];
     SUFFIX(shl__sh_eval_wgrad)(lmax, u, w, al, be, coeffs, grad, nc);
     if (g->grad_scale[0] != 1.0 || g->grad_scale[1] != 1.0)
         for (int k = 0; k < 3 * nc; ++k) /* back from scaled units in double (internal.h) */

@@ -102,10 +102,11 @@ SHL_TEST(sphere_zh_cap_matches_eq14)
     harness_note("max |zh - Eq.14| %.1e for a >= 0.3", worst);
 }
 
-/* The coefficient paths: lmax <= 5 has unrolled kernels and moderate geometry a
- * register-only set-up (src/sphere_impl.h, sphere.c); the general kernels, the
- * scaled set-up (inputs times 2^+-200 in double, 2^+-110 in float, outside the
- * moderate range; exact scalings) and shl_sphere_grad's coefficients must give the same values bit
+/* The kernel paths: lmax <= 5 has unrolled kernels (values and gradients) and
+ * moderate geometry a register-only set-up (src/sphere_impl.h, sphere.c); the
+ * general kernels, the scaled set-up (inputs times 2^+-200 in double, 2^+-110 in
+ * float, outside the moderate range; exact scalings, gradients then scale by
+ * 2^-200 exactly) and shl_sphere_grad's coefficients must give the same values bit
  * for bit (each path forms every value by the same operations); and lmax 2 and 5
  * against the quadrature with the bound of sphere_random_vs_quadrature. */
 SHL_TEST(sphere_unrolled_and_scaled_paths_bit_identical)
@@ -127,6 +128,21 @@ SHL_TEST(sphere_unrolled_and_scaled_paths_bit_identical)
             bad += memcmp(a, b, (size_t)nc * sizeof a[0]) != 0;
             CHECK(shl_sphere_grad(ctx, x, c, rad, b, g) == SHL_OK);
             bad += memcmp(a, b, (size_t)nc * sizeof a[0]) != 0;
+            { /* gradients: lmax vs the prefix of lmax L, and at scale 2^200 (ldexp(g, -200) exactly) */
+                static double bb[NC], gb[3 * NC], gs[3 * NC];
+                double xs[3], cs[3];
+                CHECK(shl_sphere_grad(big, x, c, rad, bb, gb) == SHL_OK);
+                for (int k = 0; k < 3; ++k) xs[k] = ldexp(x[k], 200), cs[k] = ldexp(c[k], 200);
+                CHECK(shl_sphere_grad(ctx, xs, cs, ldexp(rad, 200), bb, gs) == SHL_OK);
+                for (int ax = 0; ax < 3; ++ax)
+                    for (int k = 0; k < nc; ++k)
+                        bad += g[ax * nc + k] != gb[ax * NC + k] || ldexp(g[ax * nc + k], -200) != gs[ax * nc + k];
+                float gf[3 * NC], gbf[3 * NC], tmp[NC];
+                CHECK(shl_sphere_grad_f(ctx, xf, cf, (float)rad, tmp, gf) == SHL_OK);
+                CHECK(shl_sphere_grad_f(big, xf, cf, (float)rad, tmp, gbf) == SHL_OK);
+                for (int ax = 0; ax < 3; ++ax)
+                    for (int k = 0; k < nc; ++k) bad += gf[ax * nc + k] != gbf[ax * NC + k];
+            }
             for (int sgn = -1; sgn <= 1; sgn += 2) {
                 double xs[3], cs[3];
                 for (int k = 0; k < 3; ++k) xs[k] = ldexp(x[k], 200 * sgn), cs[k] = ldexp(c[k], 200 * sgn);
@@ -152,7 +168,7 @@ SHL_TEST(sphere_unrolled_and_scaled_paths_bit_identical)
     }
     CHECK(bad == 0);
     CHECK(worst < 2e-14);
-    harness_note("lmax 0..8, 25 spheres each: %d coefficient sets differ between paths; lmax 2, 5 vs quadrature "
+    harness_note("lmax 0..8, 25 spheres each: %d coefficient sets or gradient values differ between paths; lmax 2, 5 vs quadrature "
                  "max |err|/max|coeff| %.1e",
                  bad, worst);
     shl_ctx_destroy(big);
