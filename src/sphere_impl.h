@@ -144,20 +144,29 @@ static SHL__ALWAYS_INLINE void SUFFIX(sphere_small_grad)(const int L, const REAL
     }
 }
 
-/* Coefficients only, from the geometry's values (never its address, so that a
- * caller's geometry can stay in registers); out of line: the inside case and bands
- * above SHL__SPHERE_SMALL. */
 static SHL__NOINLINE void SUFFIX(sphere_inside)(int lmax, REAL *coeffs)
 {
     for (int k = 0; k < SHL_NCOEFFS(lmax); ++k) coeffs[k] = 0;
     coeffs[0] = (REAL)sqrt(4.0 * M_PI);
 }
 
-static SHL__NOINLINE void SUFFIX(sphere_value_general)(int lmax, REAL ux, REAL uy, REAL uz, REAL t, REAL s2, REAL c,
-                                                       REAL *coeffs)
+/* The coefficients outside the sphere from the geometry's values, passed in
+ * registers (a geometry struct passed by address made the kernels wait on store
+ * forwarding); one copy for every caller. */
+static SHL__NOINLINE void SUFFIX(sphere_value_regs)(int lmax, REAL ux, REAL uy, REAL uz, REAL t, REAL s2, REAL c,
+                                                    REAL *coeffs)
 {
-    REAL w[SHL_LMAX_MAX + 1];
     const REAL u[3] = {ux, uy, uz};
+    switch (lmax) {
+    case 0: SUFFIX(sphere_small)(0, u, t, s2, c, coeffs); return;
+    case 1: SUFFIX(sphere_small)(1, u, t, s2, c, coeffs); return;
+    case 2: SUFFIX(sphere_small)(2, u, t, s2, c, coeffs); return;
+    case 3: SUFFIX(sphere_small)(3, u, t, s2, c, coeffs); return;
+    case 4: SUFFIX(sphere_small)(4, u, t, s2, c, coeffs); return;
+    case 5: SUFFIX(sphere_small)(5, u, t, s2, c, coeffs); return;
+    default: break;
+    }
+    REAL w[SHL_LMAX_MAX + 1];
     /* shl__cap_weights without dw, step for step (the same values) */
     w[0] = (REAL)(2.0 * M_PI) * t;
     REAL p_prev = 1, p = c, dp_prev = 0, dp = 1, two_l1 = 3; /* two_l1 = 2l + 1, exact */
@@ -170,28 +179,14 @@ static SHL__NOINLINE void SUFFIX(sphere_value_general)(int lmax, REAL ux, REAL u
     SUFFIX(shl__sh_eval_w)(lmax, u, w, coeffs); /* HVL Eq. (15): w_l Y_lm(axis) */
 }
 
-/* The coefficients of shl__sphere_sh (no gradient), inlined into the entry points. */
+/* The coefficients of shl__sphere_sh (no gradient). */
 static SHL__ALWAYS_INLINE void SUFFIX(sphere_value)(int lmax, const shl__sphere_geom *g, REAL *coeffs)
 {
-    if (g->inside) {
+    if (g->inside)
         SUFFIX(sphere_inside)(lmax, coeffs);
-        return;
-    }
-    const REAL ux = (REAL)g->u[0], uy = (REAL)g->u[1], uz = (REAL)g->u[2];
-    const REAL t = (REAL)g->t, s2 = (REAL)g->s2, c = (REAL)g->c;
-    if (lmax > SHL__SPHERE_SMALL) {
-        SUFFIX(sphere_value_general)(lmax, ux, uy, uz, t, s2, c, coeffs);
-        return;
-    }
-    const REAL u[3] = {ux, uy, uz};
-    switch (lmax) {
-    case 0: SUFFIX(sphere_small)(0, u, t, s2, c, coeffs); return;
-    case 1: SUFFIX(sphere_small)(1, u, t, s2, c, coeffs); return;
-    case 2: SUFFIX(sphere_small)(2, u, t, s2, c, coeffs); return;
-    case 3: SUFFIX(sphere_small)(3, u, t, s2, c, coeffs); return;
-    case 4: SUFFIX(sphere_small)(4, u, t, s2, c, coeffs); return;
-    default: SUFFIX(sphere_small)(5, u, t, s2, c, coeffs); return;
-    }
+    else
+        SUFFIX(sphere_value_regs)(lmax, (REAL)g->u[0], (REAL)g->u[1], (REAL)g->u[2], (REAL)g->t, (REAL)g->s2,
+                                  (REAL)g->c, coeffs);
 }
 
 static SHL__NOINLINE void SUFFIX(sphere_inside_grad)(int lmax, REAL *coeffs, REAL *grad)
