@@ -111,6 +111,38 @@ static int check_radius(double radius)
     return radius > 0.0 ? SHL_OK : SHL_EDOMAIN;
 }
 
+/* The rest of the entry points (sphere_d, sphere_f): argument checks unless
+ * moderate, shl__sphere_geom_init, shl__sphere_sh; out of line, so that the common
+ * paths need no frame for it. */
+static SHL__NOINLINE int sphere_general_d(int lmax, const double x[3], const double center[3], double radius,
+                                          double *coeffs, double *grad, int mod)
+{
+    if (!mod) {
+        if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, x, center, radius);
+    shl__sphere_sh_d(lmax, &g, coeffs, grad);
+    return SHL_OK;
+}
+
+static SHL__NOINLINE int sphere_general_f(int lmax, const float x[3], const float center[3], float radius,
+                                          float *coeffs, float *grad, int mod)
+{
+    if (!mod) {
+        if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
+    const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, xd, cd, radius);
+    shl__sphere_sh_f(lmax, &g, coeffs, grad);
+    return SHL_OK;
+}
+
 /* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
  * so in the common case no further check is needed and no scaling (the exponent e
  * of shl__sphere_geom_init is 0); coefficients without gradient, and with it up to
@@ -134,15 +166,7 @@ static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], co
         sphere_grad_small_d(ctx->lmax, &g, coeffs, grad);
         return SHL_OK;
     }
-    if (!mod) {
-        if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
-        const int st = check_radius(radius);
-        if (st) return st;
-    }
-    shl__sphere_geom gs;
-    shl__sphere_geom_init(&gs, x, center, radius);
-    shl__sphere_sh_d(ctx->lmax, &gs, coeffs, want_grad ? grad : NULL);
-    return SHL_OK;
+    return sphere_general_d(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
 }
 
 /* As sphere_d; the geometry in double from the float arguments (exact). */
@@ -165,15 +189,7 @@ static SHL__ALWAYS_INLINE int sphere_f(const shl_ctx *ctx, const float x[3], con
         sphere_grad_small_f(ctx->lmax, &g, coeffs, grad);
         return SHL_OK;
     }
-    if (!mod) {
-        if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
-        const int st = check_radius(radius);
-        if (st) return st;
-    }
-    shl__sphere_geom gs;
-    shl__sphere_geom_init(&gs, xd, cd, radius);
-    shl__sphere_sh_f(ctx->lmax, &gs, coeffs, want_grad ? grad : NULL);
-    return SHL_OK;
+    return sphere_general_f(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
 }
 
 int shl_sphere(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
