@@ -14,6 +14,7 @@
 SHL_ISA(scalar, "", 1)
 #if defined(__x86_64__)
 SHL_ISA(avx2, "-mavx2 -mfma", shl__cpu_avx2())
+SHL_ISA(avx512, "-mavx512f -mavx512dq -mavx512vl -mavx512bw -mavx2 -mfma", shl__cpu_avx512())
 #endif
 #if defined(__aarch64__)
 SHL_ISA(neon, "", 1) /* baseline on AArch64 */
