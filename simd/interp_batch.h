@@ -14,9 +14,9 @@
  *
  * Blocks: a row of n >= VL coefficients is covered by blocks at k = 0, VL, ...
  * and a last block at n - VL, which overlaps the previous one and rewrites the
- * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient) run
- * the reference: a zero-padded copy measured 4-8x slower than it
- * (bench/bench_interp.c, lmax 0). */
+ * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient; with
+ * 8 double lanes, avx512, lmax 1 too) run the reference: a zero-padded copy
+ * measured 4-8x slower than it (bench/bench_interp.c, lmax 0). */
 #include "kernel_api.h"
 
 #define ISA(name) SHL_ISA_SUFFIX(name)

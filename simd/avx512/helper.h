@@ -45,35 +45,52 @@ static inline void vd_store(double *p, vd a) { _mm512_storeu_pd(p, a); }
 static inline vd vd_mul(vd a, vd b) { return _mm512_mul_pd(a, b); }
 static inline vd vd_fma(vd a, vd b, vd c) { return _mm512_fmadd_pd(a, b, c); }
 
+/* Four rows r0..r3 (16 lanes) to u0..u3 with, in 128-bit block q, element 4q + k
+ * of the four rows in u_k (simd/avx2/helper.h within each block: unpack pairs
+ * of rows, then shuffle pairs of pairs). */
+static inline void vf_transpose4x4_blocks(__m512 r0, __m512 r1, __m512 r2, __m512 r3, __m512 *u0, __m512 *u1, __m512 *u2,
+                                          __m512 *u3)
+{
+    const __m512 t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpackhi_ps(r0, r1);
+    const __m512 t2 = _mm512_unpacklo_ps(r2, r3), t3 = _mm512_unpackhi_ps(r2, r3);
+    *u0 = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+    *u1 = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+    *u2 = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+    *u3 = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* Columns k, 4 + k, 8 + k, 12 + k from a = u_k of rows 0..3, b of rows 4..7,
+ * c of rows 8..11, d of rows 12..15: block q of each, in order, is column
+ * 4q + k.  Two rounds of 128-bit block shuffles (blocks 0, 1 or 2, 3 of a and
+ * b, and of c and d; then the even or odd blocks of those). */
+static inline void vf_store_columns(__m512 a, __m512 b, __m512 c, __m512 d, float *dst, size_t stride, int k, int nvalid)
+{
+    const __m512 ab_lo = _mm512_shuffle_f32x4(a, b, 0x44), ab_hi = _mm512_shuffle_f32x4(a, b, 0xEE);
+    const __m512 cd_lo = _mm512_shuffle_f32x4(c, d, 0x44), cd_hi = _mm512_shuffle_f32x4(c, d, 0xEE);
+    _mm512_storeu_ps(dst + (size_t)k * stride, _mm512_shuffle_f32x4(ab_lo, cd_lo, 0x88));
+    if (4 + k < nvalid) _mm512_storeu_ps(dst + (size_t)(4 + k) * stride, _mm512_shuffle_f32x4(ab_lo, cd_lo, 0xDD));
+    if (8 + k < nvalid) _mm512_storeu_ps(dst + (size_t)(8 + k) * stride, _mm512_shuffle_f32x4(ab_hi, cd_hi, 0x88));
+    if (12 + k < nvalid) _mm512_storeu_ps(dst + (size_t)(12 + k) * stride, _mm512_shuffle_f32x4(ab_hi, cd_hi, 0xDD));
+}
+
 /* Tile transpose-store: src holds 16 rows of 16 lanes (row i at src + 16 i);
- * lane j of every row goes to dst + j * stride (16 floats), for j < nvalid.
- * As simd/avx2/helper.h within each 128-bit block (unpack pairs of rows,
- * shuffle pairs of pairs: u[4g + k] holds element 4q + k of rows 4g..4g+3 in
- * block q), then two rounds of 128-bit block shuffles gather block q of
- * u[k], u[4 + k], u[8 + k], u[12 + k] into column 4q + k. */
+ * lane j of every row goes to dst + j * stride (16 floats), for j < nvalid
+ * (nvalid >= 1).  Straight-line code: every intermediate stays in a register. */
 static inline void vf_store_transposed(const float *src, float *dst, size_t stride, int nvalid)
 {
-    __m512 u[16];
-    for (int g = 0; g < 4; ++g) {
-        const float *s = src + 64 * g;
-        const __m512 r0 = _mm512_loadu_ps(s), r1 = _mm512_loadu_ps(s + 16);
-        const __m512 r2 = _mm512_loadu_ps(s + 32), r3 = _mm512_loadu_ps(s + 48);
-        const __m512 t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpackhi_ps(r0, r1);
-        const __m512 t2 = _mm512_unpacklo_ps(r2, r3), t3 = _mm512_unpackhi_ps(r2, r3);
-        u[4 * g] = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-        u[4 * g + 1] = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-        u[4 * g + 2] = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-        u[4 * g + 3] = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
-    }
-    for (int k = 0; k < 4; ++k) {
-        /* blocks 0, 1 (lo) or 2, 3 (hi) of u[k] and u[4 + k], of u[8 + k] and u[12 + k] */
-        const __m512 ab_lo = _mm512_shuffle_f32x4(u[k], u[4 + k], 0x44), ab_hi = _mm512_shuffle_f32x4(u[k], u[4 + k], 0xEE);
-        const __m512 cd_lo = _mm512_shuffle_f32x4(u[8 + k], u[12 + k], 0x44), cd_hi = _mm512_shuffle_f32x4(u[8 + k], u[12 + k], 0xEE);
-        const __m512 col[4] = {_mm512_shuffle_f32x4(ab_lo, cd_lo, 0x88), _mm512_shuffle_f32x4(ab_lo, cd_lo, 0xDD),
-                               _mm512_shuffle_f32x4(ab_hi, cd_hi, 0x88), _mm512_shuffle_f32x4(ab_hi, cd_hi, 0xDD)};
-        for (int q = 0; q < 4; ++q)
-            if (4 * q + k < nvalid) _mm512_storeu_ps(dst + (size_t)(4 * q + k) * stride, col[q]);
-    }
+    __m512 a0, a1, a2, a3, b0, b1, b2, b3, c0, c1, c2, c3, d0, d1, d2, d3;
+    vf_transpose4x4_blocks(_mm512_loadu_ps(src), _mm512_loadu_ps(src + 16), _mm512_loadu_ps(src + 32),
+                           _mm512_loadu_ps(src + 48), &a0, &a1, &a2, &a3);
+    vf_transpose4x4_blocks(_mm512_loadu_ps(src + 64), _mm512_loadu_ps(src + 80), _mm512_loadu_ps(src + 96),
+                           _mm512_loadu_ps(src + 112), &b0, &b1, &b2, &b3);
+    vf_transpose4x4_blocks(_mm512_loadu_ps(src + 128), _mm512_loadu_ps(src + 144), _mm512_loadu_ps(src + 160),
+                           _mm512_loadu_ps(src + 176), &c0, &c1, &c2, &c3);
+    vf_transpose4x4_blocks(_mm512_loadu_ps(src + 192), _mm512_loadu_ps(src + 208), _mm512_loadu_ps(src + 224),
+                           _mm512_loadu_ps(src + 240), &d0, &d1, &d2, &d3);
+    vf_store_columns(a0, b0, c0, d0, dst, stride, 0, nvalid);
+    if (nvalid > 1) vf_store_columns(a1, b1, c1, d1, dst, stride, 1, nvalid);
+    if (nvalid > 2) vf_store_columns(a2, b2, c2, d2, dst, stride, 2, nvalid);
+    if (nvalid > 3) vf_store_columns(a3, b3, c3, d3, dst, stride, 3, nvalid);
 }
 
 #endif
