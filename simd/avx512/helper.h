@@ -44,6 +44,10 @@ static inline vd vd_load_float(const float *p) { return _mm512_cvtps_pd(_mm256_l
 static inline void vd_store(double *p, vd a) { _mm512_storeu_pd(p, a); }
 static inline vd vd_mul(vd a, vd b) { return _mm512_mul_pd(a, b); }
 static inline vd vd_fma(vd a, vd b, vd c) { return _mm512_fmadd_pd(a, b, c); }
+/* Rows shorter than 8 doubles (lmax 1: 4 coefficients) take the avx2 kernel
+ * (4 lanes; avx512 support includes AVX2 and FMA) instead of the scalar
+ * reference: 2.3x faster (bench/bench_simd.c --isa-only, Hermite at lmax 1). */
+#define SHL_INTERP_SHORT_ROWS shl__interp_f_avx2
 
 /* Four rows r0..r3 (16 lanes) to u0..u3 with, in 128-bit block q, element 4q + k
  * of the four rows in u_k (simd/avx2/helper.h within each block: unpack pairs
