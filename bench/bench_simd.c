@@ -427,7 +427,7 @@ static void isa_comparison(FILE *csv, const job *base, const shl_lights *set, co
     printf("\n## ISA comparison, lmax %d, one core (default ISA: %s; speed = time of %s / time of the ISA)\n\n",
            CMP_LMAX, default_isa, names[ref]);
     printf("Interpolation: shl_grid_interp of %d points per call from a %dx%dx%d float grid (L2-resident), one thread;\n"
-           "also at lmax 1, whose rows of 4 coefficients are shorter than 8 double lanes (avx512 runs the reference).\n\n",
+           "also at lmax 1, whose rows of 4 coefficients are shorter than 8 double lanes (avx512: the avx2 kernel).\n\n",
            IP_CHUNK, res[0], res[1], res[2]);
     printf("| kernel | ISA | ns per point | speed vs %s | GFLOP/s | own-width peak GFLOP/s | of peak |\n", names[ref]);
     printf("|---|---|---|---|---|---|---|\n");
