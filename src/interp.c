@@ -122,6 +122,7 @@ typedef struct {
     double b;
     const double *pts;
     double *out;
+    int ahead; /* request the next point's rows (grids above SHL__INTERP_AHEAD_BYTES) */
 } interp_job;
 
 static void setup_point(const interp_job *job, long p, point_setup *s)
@@ -148,9 +149,10 @@ static void ahead_rows(const shl_grid *g, int method, const point_setup *s, shl_
     for (int r = 0; r < a->nrange; ++r) a->row[r] = data + s->ofs[pairs ? 2 * r : r] * esize;
 }
 
-/* Point p's set-up is made while p - 1 is computed, and p's rows requested
- * during p - 1's arithmetic (shl__interp_ahead): two points in flight.  The
- * results are those of one point at a time (the prefetches change no value). */
+/* Point p's set-up is made while p - 1 is computed, and (job->ahead) p's rows
+ * requested during p - 1's arithmetic (shl__interp_ahead): two points in
+ * flight.  The results are those of one point at a time (the prefetches change
+ * no value). */
 static void interp_range(void *arg, int worker, long begin, long end)
 {
     const interp_job *job = arg;
@@ -163,7 +165,7 @@ static void interp_range(void *arg, int worker, long begin, long end)
         shl__interp_ahead ahead = {.nrange = 0};
         if (p + 1 < end) {
             setup_point(job, p + 1, &s[(p + 1) & 1]);
-            ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
+            if (job->ahead) ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
         }
         double *out = job->out + nv * (size_t)p;
         if (g->storage == SHL_GRID_DOUBLE)
@@ -195,7 +197,8 @@ static int grid_interp(const shl_grid *grid, int method, double taylor_b, int np
         for (int a = 0; a < 3; ++a) out |= x[a] < grid->lo[a] || x[a] > grid->hi[a];
         outside += out;
     }
-    interp_job job = {grid, method, taylor_b, pts, rgb};
+    const size_t esize = grid->storage == SHL_GRID_DOUBLE ? sizeof(double) : sizeof(float);
+    interp_job job = {grid, method, taylor_b, pts, rgb, grid->nnodes * grid->node_len * esize > SHL__INTERP_AHEAD_BYTES};
     const int st = shl__parallel_for(npts, 256, nthreads, interp_range, &job);
     if (st == SHL_OK && nclamped) *nclamped = outside;
     return st;
