@@ -23,11 +23,22 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 enum { CHUNK = 128, NPTS = 1 << 16, MAX_ROUNDS = 11 };
 
 static int rounds = MAX_ROUNDS; /* --quick: 3 */
+
+/* Clock of the one-core timings: wall clock, or (--cpu-time) this thread's CPU time, which
+ * leaves out the time other processes hold the core (memory stalls still count). */
+static double thread_cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+static double (*one_core_now)(void) = bench_now;
 static size_t max_bytes; /* --mb: a cap on out_of_cache_bytes (0: none) */
 
 /* Bytes that cannot stay in any cache: 4 x the last-level cache, at least 120 MB
@@ -65,7 +76,7 @@ static size_t bw_doubles; /* out_of_cache_bytes() / 8, at least 256 MB: far beyo
 static double read_bw(const double *a, size_t n, int reps)
 {
     double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0, s6 = 0, s7 = 0;
-    const double t0 = bench_now();
+    const double t0 = one_core_now();
     for (int r = 0; r < reps; ++r)
         for (size_t i = 0; i < n; i += 8) {
             s0 += a[i];
@@ -77,16 +88,16 @@ static double read_bw(const double *a, size_t n, int reps)
             s6 += a[i + 6];
             s7 += a[i + 7];
         }
-    const double t = bench_now() - t0;
+    const double t = one_core_now() - t0;
     bench_sink += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7;
     return (double)reps * n * sizeof(double) / t;
 }
 
 static double triad_bw(double *a, const double *b, const double *c, size_t n)
 {
-    const double s = 1.0000001, t0 = bench_now();
+    const double s = 1.0000001, t0 = one_core_now();
     for (size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
-    const double t = bench_now() - t0;
+    const double t = one_core_now() - t0;
     bench_sink += a[n / 2];
     return 3.0 * n * sizeof(double) / t; /* STREAM convention: 24 bytes per element */
 }
@@ -130,14 +141,16 @@ typedef struct {
     long npts;           /* vertices per timed call: chunks over pts[0 .. npts) */
     const double *pts;
     double *out;         /* chunk * 3 nc doubles, reused: stays in cache */
+    int wall;            /* timed by the wall clock even with --cpu-time (thread comparisons) */
 } job;
 
 static double run(const job *j) /* seconds per vertex */
 {
-    const double t0 = bench_now();
+    double (*now)(void) = j->wall ? bench_now : one_core_now;
+    const double t0 = now();
     for (long p = 0; p < j->npts; p += j->chunk)
         must(shl_grid_interp(j->g, j->method, 2.0, (int)j->chunk, j->pts + 3 * p, j->out, j->nthreads), "interp");
-    const double t = bench_now() - t0;
+    const double t = now() - t0;
     bench_sink += j->out[1];
     return t / (double)j->npts;
 }
@@ -199,10 +212,10 @@ static double polygon_batch_time(int n, int with_grad, const double *pts)
     for (int k = 0; k < 3 * NP; ++k) p[k] = (float)(2.0 * pts[k] - 1.0);
     double t[MAX_ROUNDS];
     for (int r = 0; r <= rounds; ++r) { /* round 0: warm-up */
-        const double t0 = bench_now();
+        const double t0 = one_core_now();
         for (int q = 0; q < 40; ++q)
             must(shl_polygon_batch_f(ctx, v, n, NP, p, out, with_grad ? grad : NULL), "polygon_batch");
-        if (r) t[r - 1] = (bench_now() - t0) / (40.0 * NP);
+        if (r) t[r - 1] = (one_core_now() - t0) / (40.0 * NP);
     }
     bench_sink += out[1];
     shl_ctx_destroy(ctx);
@@ -211,7 +224,7 @@ static double polygon_batch_time(int n, int with_grad, const double *pts)
 
 int main(int argc, char **argv)
 {
-    const char *csv_path = "build/bench/bench_interp.csv", *mb_arg = NULL, *quick = NULL;
+    const char *csv_path = "build/bench/bench_interp.csv", *mb_arg = NULL, *quick = NULL, *cpu_time = NULL;
     const double gb = (double)out_of_cache_bytes() / (1 << 30);
     char about[2048];
     snprintf(about, sizeof about,
@@ -219,23 +232,27 @@ int main(int argc, char **argv)
              "Hermite at lmax 0, 4 and 8 from an L2-resident grid and from a grid far larger than the caches\n"
              "(random vertex order), the SIMD kernel against the scalar reference, with and without the\n"
              "look-ahead (calls of one vertex: the order before it), bytes per vertex and the share of this\n"
-             "core's read bandwidth (DRAM, resp. L2, measured in the same run), 2 threads against 1, and the\n"
-             "papers' GPU throughput next to ours.\n"
+             "core's read bandwidth (DRAM, resp. L2, measured in the same run), random vs cell-sorted vertex\n"
+             "order, 2 threads against 1, and the papers' GPU throughput next to ours.\n"
              "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
              "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
              "--mb "
              "caps S (smaller S: faster, but a large L3 may then hold part of the grid).\n"
              "About 3-4 minutes on an idle 2-core machine with S = 1.5 GB (14 minutes at load average 13);\n"
-             "--quick: lmax 8 only, 3 rounds (a check that it works, not a measurement).\n"
              "progress on stderr.\n"
+             "--quick: lmax 8 only, 3 rounds (a check that it works, not a measurement).  --cpu-time: the one-core\n"
+             "timings (bandwidths too) in this thread's CPU time, which leaves out the time other processes hold\n"
+             "the core: on a loaded machine; the 2-thread comparison stays wall clock.\n"
              "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
              gb);
     const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_interp.csv)"},
                               {"-m", "--mb", "MB", &mb_arg, "cap on the out-of-cache size S in MB (at least 16)"},
-                              {"-q", "--quick", NULL, &quick, "lmax 8 only, 3 rounds (default: lmax 0, 4, 8, 11 rounds)"}};
-    const bench_cli cli = {"bench_interp", "[-o FILE] [--mb MB] [--quick]", about, opts, 3, 0};
+                              {"-q", "--quick", NULL, &quick, "lmax 8 only, 3 rounds (default: lmax 0, 4, 8, 11 rounds)"},
+                              {"-c", "--cpu-time", NULL, &cpu_time, "one-core timings in thread CPU time (default: wall clock)"}};
+    const bench_cli cli = {"bench_interp", "[-o FILE] [--mb MB] [--quick] [--cpu-time]", about, opts, 4, 0};
     bench_parse(&cli, argc, argv, NULL);
     if (quick) rounds = 3;
+    if (cpu_time) one_core_now = thread_cpu_now;
     if (mb_arg) {
         char *end;
         const long mb = strtol(mb_arg, &end, 10);
@@ -252,6 +269,7 @@ int main(int argc, char **argv)
     must(shl_ctx_create(0, &probe), "ctx");
     const char *isa = shl_ctx_isa(probe);
     printf("library: %s\nSIMD ISA: %s; reference: SHLIGHT_ISA=scalar (src/interp_kernel.h)\n", shl_build_info(), isa);
+    printf("clock of the one-core timings: %s\n", cpu_time ? "thread CPU time (--cpu-time)" : "wall");
 
     /* vertices: uniform in the box, in random order (no locality between neighbours) */
     double *pts = xmalloc(sizeof(double) * 3 * NPTS);
@@ -303,7 +321,8 @@ int main(int argc, char **argv)
            "DRAM: %d^3 / %d^3 / %d^3 nodes at lmax 0 / 4 / 8 (about %.0f MB at lmax 4-8), vertices in random order.\n"
            "bytes/vertex: grid data read (8 corners); GB/s = bytes/vertex x vertices/s; of read BW: / the read bandwidth\n"
            "above (DRAM rows: DRAM read; L2 rows: L2 read).  No look-ahead: the SIMD kernel in calls of one vertex (no\n"
-           "next vertex to request: the order before the look-ahead; the call overhead, ~0.1 us, shows at lmax 0).\n\n",
+           "next vertex to request or set up: the order before the look-ahead), which adds the per-call argument checks;\n"
+           "grids of at most 1 MiB (the L2 rows) make no requests, only the next vertex's set-up overlaps.\n\n",
            CHUNK, CHUNK, out_of_cache_res(0), out_of_cache_res(4), out_of_cache_res(8), (double)out_of_cache_bytes() / (1 << 20));
     printf("| lmax | method | grid | reference ns/vertex | SIMD ns/vertex | speed-up | SIMD Mvertices/s | bytes/vertex | GB/s | of read BW "
            "| no look-ahead ns/vertex | of read BW | look-ahead speed-up |\n");
@@ -325,7 +344,7 @@ int main(int argc, char **argv)
                 /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
                 bench_progress("interpolation, lmax %d, %s grid: timing %s (step 3/5)...", lmax, big ? "out-of-cache" : "L2",
                                mname[m]);
-                job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out}, jr = js, j1 = js;
+                job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out, 0}, jr = js, j1 = js;
                 jr.g = gr;
                 j1.chunk = 1; /* no look-ahead */
                 const long reps = big ? 1 : (lmax == 0 ? 400 : lmax == 4 ? 100 : 40);
@@ -376,7 +395,7 @@ int main(int argc, char **argv)
         bench_progress("vertex order, lmax 8, out-of-cache grid: filling %d^3 nodes (step 4/5)...", res);
         shl_grid *g = make_grid(ctx, res);
         double *spts = sorted_by_cell(pts, NPTS, res);
-        job jrand = {g, SHL_INTERP_HERMITE, 1, CHUNK, NPTS, pts, out}, jsort = jrand;
+        job jrand = {g, SHL_INTERP_HERMITE, 1, CHUNK, NPTS, pts, out, 0}, jsort = jrand;
         jsort.pts = spts;
         double tr[MAX_ROUNDS], ts[MAX_ROUNDS], sp[MAX_ROUNDS];
         run(&jrand);
@@ -406,7 +425,7 @@ int main(int argc, char **argv)
         for (int big = 0; big <= 1; ++big) {
             bench_progress("2 threads vs 1, lmax %d, %s grid (step 4/5)...", lmax, big ? "out-of-cache" : "L2");
             shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
-            job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out}, j2 = j1;
+            job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out, 1}, j2 = j1;
             j2.nthreads = 2;
             double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS];
             run(&j1);
