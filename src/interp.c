@@ -149,10 +149,10 @@ static void ahead_rows(const shl_grid *g, int method, const point_setup *s, shl_
     for (int r = 0; r < a->nrange; ++r) a->row[r] = data + s->ofs[pairs ? 2 * r : r] * esize;
 }
 
-/* Point p's set-up is made while p - 1 is computed, and (job->ahead) p's rows
- * requested during p - 1's arithmetic (shl__interp_ahead): two points in
- * flight.  The results are those of one point at a time (the prefetches change
- * no value). */
+/* Two points in flight: point p + 1's set-up is made before point p's
+ * arithmetic (the core overlaps the two) and, if job->ahead, its corner rows
+ * are requested during p's arithmetic (shl__interp_ahead).  The results are
+ * those of one point at a time: the requests change no value. */
 static void interp_range(void *arg, int worker, long begin, long end)
 {
     const interp_job *job = arg;
