@@ -274,7 +274,7 @@ def hvl_table1(rows, out):
 # Figures composed of the panels bench_tables writes: (panel file suffixes, titles) per row.
 PANEL_FIGURES = {
     "wang2018_fig4": ("Wang 2018 Fig. 4: analytic vs Monte Carlo projection (lmax 8)",
-                      [[("analytic", "analytic"), ("monte-carlo", "Monte Carlo, 16384 samples"),
+                      [[("analytic", "analytic"), ("monte-carlo", "stratified Monte Carlo, ~16384 samples"),
                         ("error", "10 x |difference|")]], "wang2018_fig4.csv"),
     "wang2018_fig5": ("Wang 2018 Fig. 5: shadows at SH orders 2, 4, 6, 8",
                       [[("lmax2", "lmax 2"), ("lmax4", "lmax 4"), ("lmax6", "lmax 6"), ("lmax8", "lmax 8")]], None),
