@@ -1696,9 +1696,12 @@ int main(int argc, char **argv)
     const bench_cli cli = {
         "bench_tables", "[-o DIR] [-m DIR] [section ...]",
         "The results tables of four papers (Wu 2020 Table 1 and Figs. 8-9, Wang 2018 Table 2, Annen 2004\n"
-        "Table 1, HVL 2022 Table 1) and an accuracy-vs-time sweep, reproduced with the software-rasterized\n"
+        "Table 1, HVL 2022 Tables 1-2) and an accuracy-vs-time sweep, reproduced with the software-rasterized\n"
         "PRT harness on 19 scenes (bench/scenes).  About 4 minutes on an idle 2-core machine (sections:\n"
-        "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 10 s, sweep 2 min); progress on stderr.\n"
+        "wu 40 s, wu-fig8 60 s, wu-fig9 20 s, wang 10 s, annen 1 s, hvl 20 s, sweep 2 min); progress on stderr.\n"
+        "HVL Table 2's path-traced reference runs tools/hvl_reference.py with the Python named by\n"
+        "SHLIGHT_ORACLE_PYTHON (make bench-tables: the oracle venv, if built; ~15 s, then cached under DIR);\n"
+        "without it the table says the reference is missing and leaves its error columns empty.\n"
         "\n"
         "sections: wu wu-fig8 wu-fig9 wang annen hvl sweep (default: all; a subset is marked incomplete).\n"
         "\n"
