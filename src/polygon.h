@@ -44,6 +44,12 @@ void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
 
+/* ZH integrals, their gradient (as shl__poly_zh_grad_d) and their six second
+ * derivatives zh_hess[i * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE + l], i = xx, xy, xz,
+ * yy, yz, zz, in scaled units (the caller multiplies by grad_scale twice);
+ * polygon_hess.c. */
+void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad, double *zh_hess);
+
 /* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3 (polygon.c);
  * used by the four instances above when g->sliver and lmax <= SHL__AREA_LMAX. */
 void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
