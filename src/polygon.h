@@ -58,6 +58,10 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
 /* Sparse ZH -> SH reconstruction (Wang 2018 Eq. 33) from the lobe table (zh_lobes.c);
  * zh laid out as above. */
 void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
+/* shl__zh_to_sh of the SHL__ZH_MULTI blocks zh + b zstride into out[b], bit for bit,
+ * the blocks side by side (value, gradient, Hessian: polygon_hess.c). */
+#define SHL__ZH_MULTI 10
+void shl__zh_to_sh_multi(int lmax, const double *zh, size_t zstride, double *const out[SHL__ZH_MULTI]);
 /* Float ZH in, float SH out; accumulates in double. */
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
 

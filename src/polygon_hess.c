@@ -194,6 +194,47 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *
     }
 }
 
+/* shl__zh_to_sh of the SHL__ZH_MULTI blocks zh + b zstride into out[b] (polygon.h): the same
+ * sums in the same order (bit for bit shl__zh_to_sh), the blocks innermost with a fixed
+ * count, so that the compiler keeps the accumulators in vector registers and loads each
+ * weight once for all blocks. */
+void shl__zh_to_sh_multi(int lmax, const double *zh, size_t zstride, double *const out[SHL__ZH_MULTI])
+{
+    enum { MB = SHL__ZH_MULTI };
+    for (int l = 0; l <= lmax; ++l) {
+        double even[SHL_LMAX_MAX + 1][MB], odd[SHL_LMAX_MAX + 1][MB];
+        for (int b = 0; b < MB; ++b) {
+            const double *z = zh + (size_t)b * zstride;
+            even[0][b] = z[l];
+            for (int k = 1; k <= l; ++k) {
+                const double z1 = z[(2 * k - 1) * SHL__ZH_STRIDE + l], z2 = z[2 * k * SHL__ZH_STRIDE + l];
+                even[k][b] = z1 + z2;
+                odd[k - 1][b] = z1 - z2;
+            }
+        }
+        const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
+        const int base = l * (l + 1);
+        for (int m = 0; m <= l; ++m) {
+            double acc[MB] = {0};
+            for (int k = 0; k <= l; ++k) {
+                const double w = we[m * (l + 1) + k];
+#pragma GCC unroll 16
+                for (int b = 0; b < MB; ++b) acc[b] += w * even[k][b];
+            }
+            for (int b = 0; b < MB; ++b) out[b][base + m] = acc[b];
+        }
+        for (int m = 1; m <= l; ++m) {
+            double acc[MB] = {0};
+            for (int k = 0; k < l; ++k) {
+                const double w = wo[(m - 1) * l + k];
+#pragma GCC unroll 16
+                for (int b = 0; b < MB; ++b) acc[b] += w * odd[k][b];
+            }
+            for (int b = 0; b < MB; ++b) out[b][base - m] = acc[b];
+        }
+    }
+}
+
 int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n, double *coeffs,
                      double *grad, double *hess)
 {
@@ -205,9 +246,9 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     double zh[10 * SHL__ZH_BLOCK]; /* ZH, 3 gradient blocks, 6 Hessian blocks */
     shl__poly_geom_init(&g, x, verts, n);
     shl__poly_zh_hess_d(&g, lmax, zh, zh + SHL__ZH_BLOCK, zh + 4 * SHL__ZH_BLOCK);
-    shl__zh_to_sh(lmax, zh, coeffs);
-    for (int a = 0; a < 3; ++a) shl__zh_to_sh(lmax, zh + (1 + a) * SHL__ZH_BLOCK, grad + a * nc);
-    for (int i = 0; i < 6; ++i) shl__zh_to_sh(lmax, zh + (4 + i) * SHL__ZH_BLOCK, hess + i * nc);
+    double *const out[SHL__ZH_MULTI] = {coeffs,       grad,         grad + nc,    grad + 2 * nc, hess,
+                                        hess + nc,    hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
+    shl__zh_to_sh_multi(lmax, zh, SHL__ZH_BLOCK, out);
     shl__poly_grad_unscale(&g, grad, 3 * nc);
     shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */
     shl__poly_grad_unscale(&g, hess, 6 * nc);
