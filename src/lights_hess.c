@@ -1,21 +1,22 @@
 /* Light sets with second derivatives: as shl__lights_eval (lights.c), each
  * light's lobe integrals, their gradient and their Hessian (polygon_hess.c,
  * sphere_hess.c) are accumulated per colour channel and reconstructed once per
- * point (Wang 2018 Eq. 33 is linear): 3 x 10 reconstructions per point. */
+ * point (Wang 2018 Eq. 33 is linear): 3 x 10 reconstructions per point, in three
+ * calls of shl__zh_to_sh_multi. */
 #include "lights.h"
 #include "polygon.h"
 #include "sphere.h"
 #include <string.h>
 
-enum { NBLK = 10 }; /* ZH, 3 gradient blocks, 6 Hessian blocks (xx xy xz yy yz zz) */
+enum { NBLK = SHL__ZH_MULTI }; /* value, 3 gradient, 6 Hessian components, interleaved (polygon.h) */
 
-/* Accumulator block: lobes d <= 2 lmax, bands l <= lmax (as lights.c). */
-static size_t acc_block(int lmax) { return (size_t)(2 * lmax) * SHL__ZH_STRIDE + (size_t)lmax + 1; }
+/* Accumulator: lobes d <= 2 lmax, bands l <= lmax (as lights.c), NBLK values each. */
+static size_t acc_size(int lmax) { return ((size_t)(2 * lmax) * SHL__ZH_STRIDE + (size_t)lmax + 1) * NBLK; }
 
-size_t shl__lights_hess_ws_size(int lmax) { return NBLK * (size_t)SHL__ZH_BLOCK + 3 * NBLK * acc_block(lmax); }
+size_t shl__lights_hess_ws_size(int lmax) { return NBLK * (size_t)SHL__ZH_BLOCK + 3 * acc_size(lmax); }
 
-/* The 10 blocks of one unit-radiance light at x, unscaled; 0 if it does not reach x. */
-static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lmax, const double x[3], double *zh)
+/* The interleaved lobe integrals of one unit-radiance light at x, unscaled; 0 if it does not reach x. */
+static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lmax, const double x[3], double *z10)
 {
     switch (li->kind) {
     case SHL__LIGHT_POLYGON: {
@@ -23,19 +24,21 @@ static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lma
         if (!li->two_sided && !(shl__light_front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
         shl__poly_geom g;
         shl__poly_geom_init(&g, x, v, li->n);
-        shl__poly_zh_hess_d(&g, lmax, zh, zh + SHL__ZH_BLOCK, zh + 4 * SHL__ZH_BLOCK);
-        for (int b = 1; b < NBLK; ++b) /* gradient: 2^-E once, Hessian: twice */
-            for (int d = 0; d <= 2 * lmax; ++d) {
-                double *row = zh + b * SHL__ZH_BLOCK + d * SHL__ZH_STRIDE;
-                shl__poly_grad_unscale(&g, row, lmax + 1);
-                if (b >= 4) shl__poly_grad_unscale(&g, row, lmax + 1);
-            }
+        const int fold = shl__poly_hess_fold(&g);
+        shl__poly_zh_hess_d(&g, lmax, z10, fold);
+        if (!fold) /* gradient: 2^-E once, Hessian: twice */
+            for (int d = 0; d <= 2 * lmax; ++d)
+                for (int l = 0; l <= lmax; ++l) {
+                    double *o = z10 + (d * SHL__ZH_STRIDE + l) * NBLK;
+                    shl__poly_grad_unscale(&g, o + 1, NBLK - 1);
+                    shl__poly_grad_unscale(&g, o + 4, NBLK - 4);
+                }
         return 1;
     }
     case SHL__LIGHT_SPHERE: {
         shl__sphere_geom g;
         shl__sphere_geom_init(&g, x, li->center, li->radius);
-        shl__sphere_zh_hess(&g, lmax, zh, zh + SHL__ZH_BLOCK, zh + 4 * SHL__ZH_BLOCK);
+        shl__sphere_zh_hess(&g, lmax, z10);
         return 1;
     }
     }
@@ -46,25 +49,26 @@ void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const
                            double *grad, double *hess)
 {
     const int nc = SHL_NCOEFFS(lmax), ndir = 2 * lmax + 1;
-    const size_t nb = acc_block(lmax);
-    double *zh = ws, *acc = ws + NBLK * SHL__ZH_BLOCK; /* colour c, block b at (c * NBLK + b) * nb */
-    memset(acc, 0, sizeof(double) * 3 * NBLK * nb);
+    const size_t na = acc_size(lmax);
+    double *z10 = ws, *acc = ws + NBLK * SHL__ZH_BLOCK; /* colour c at c * na */
+    memset(acc, 0, sizeof(double) * 3 * na);
     for (int i = 0; i < lights->count; ++i) {
         const shl__light *li = &lights->items[i];
-        if (!light_zh_hess(lights, li, lmax, x, zh)) continue;
-        for (int c = 0; c < 3; ++c)
-            for (int b = 0; b < NBLK; ++b) {
-                const double s = li->rgb[c], *src = zh + b * SHL__ZH_BLOCK;
-                double *dst = acc + (c * NBLK + b) * nb;
-                for (int d = 0; d < ndir; ++d)
-                    for (int l = 0; l <= lmax; ++l) dst[d * SHL__ZH_STRIDE + l] += s * src[d * SHL__ZH_STRIDE + l];
+        if (!light_zh_hess(lights, li, lmax, x, z10)) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double s = li->rgb[c];
+            double *dst = acc + c * na;
+            for (int d = 0; d < ndir; ++d) {
+                const size_t row = (size_t)d * SHL__ZH_STRIDE * NBLK;
+                for (size_t j = 0; j < (size_t)(lmax + 1) * NBLK; ++j) dst[row + j] += s * z10[row + j];
             }
+        }
     }
     for (int c = 0; c < 3; ++c) {
         double *g = grad + c * 3 * nc, *h = hess + c * 6 * nc;
         double *const out[SHL__ZH_MULTI] = {rgb + c * nc, g,          g + nc,     g + 2 * nc, h,
                                             h + nc,       h + 2 * nc, h + 3 * nc, h + 4 * nc, h + 5 * nc};
-        shl__zh_to_sh_multi(lmax, acc + c * NBLK * nb, nb, out);
+        shl__zh_to_sh_multi(lmax, acc + c * na, out);
     }
 }
 

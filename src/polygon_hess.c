@@ -82,12 +82,16 @@ static void hess_edge_init(const shl__poly_geom *g, int e, hess_edge *h)
 
 enum { NL = 2 }; /* lobes side by side, as SHL__ZH_LANES in polygon_zh.h */
 
-void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad, double *zh_hess)
+void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int unscaled)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
-    double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
+    const double sc = g->grad_scale[0] * g->grad_scale[1];
+    double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
+        s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
     for (int l = 0; l <= lmax; ++l) {
         norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
+        gnorm[l] = unscaled ? norm[l] * sc : norm[l];
+        hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
         s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Wang Eq. 29 weights */
         s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
     }
@@ -98,12 +102,12 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *
         const double *lobe[NL];
         for (int k = 0; k < NL; ++k) lobe[k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1];
         double bsum[SHL_LMAX_MAX + 1][NL], surf[SHL_LMAX_MAX + 1][NL];
-        double gsum[3][SHL_LMAX_MAX + 1][NL], hsum[6][SHL_LMAX_MAX + 1][NL];
+        double gsum[SHL_LMAX_MAX + 1][NL][4], hsum[SHL_LMAX_MAX + 1][NL][6]; /* components innermost: vector steps */
         for (int l = 0; l <= lmax; ++l)
             for (int k = 0; k < NL; ++k) {
                 bsum[l][k] = 0.0;
-                for (int a = 0; a < 3; ++a) gsum[a][l][k] = 0.0;
-                for (int i = 0; i < 6; ++i) hsum[i][l][k] = 0.0;
+                for (int a = 0; a < 4; ++a) gsum[l][k][a] = 0.0;
+                for (int i = 0; i < 6; ++i) hsum[l][k][i] = 0.0;
             }
         for (int e = 0; e < n; ++e) {
             const int f = (e + 1 == n) ? 0 : e + 1;
@@ -160,15 +164,22 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *
                     m2[k] = m1[k], m1[k] = ml, e1[k] = el;
                 }
             }
-            const double *mu = g->mu[e];
+            const double mu[4] = {g->mu[e][0], g->mu[e][1], g->mu[e][2], 0.0};
+            double tw[6], tl[6], tm[6];
+            for (int i = 0; i < 6; ++i) tw[i] = h->tw[i], tl[i] = h->tl[i], tm[i] = h->tm[i];
+            const double gw2 = 2.0 * h->gw, gl2 = 2.0 * h->gl, dff2 = h->dff2, ff2 = h->ff2, fe2 = h->fe2;
+            const double dlw = h->dlw, dll = h->dll;
             for (int l = 0; l <= lmax; ++l) {
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
-                    const double il = ei[l][k];
-                    const double al = h->dff2 * ep[l][k] + h->ff2 * edp[l][k], bl = h->fe2 * ep[l][k]; /* (H6) */
-                    const double qw = 2.0 * il * h->gw - bl * h->dlw, ql = 2.0 * il * h->gl - al - bl * h->dll;
-                    for (int i = 0; i < 6; ++i) hsum[i][l][k] += qw * h->tw[i] + ql * h->tl[i] - em[l][k] * h->tm[i];
-                    for (int ax = 0; ax < 3; ++ax) gsum[ax][l][k] += mu[ax] * il; /* Wu Eq. 11 */
+                    const double il = ei[l][k], sm = em[l][k];
+                    const double al = dff2 * ep[l][k] + ff2 * edp[l][k], bl = fe2 * ep[l][k]; /* (H6) */
+                    const double qw = il * gw2 - bl * dlw, ql = il * gl2 - al - bl * dll;
+                    double *hp = hsum[l][k], *gp = gsum[l][k];
+#pragma GCC unroll 6
+                    for (int i = 0; i < 6; ++i) hp[i] += qw * tw[i] + ql * tl[i] - sm * tm[i];
+#pragma GCC unroll 4
+                    for (int ax = 0; ax < 4; ++ax) gp[ax] += mu[ax] * il; /* Wu Eq. 11 */
                 }
             }
         }
@@ -180,36 +191,35 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *zh, double *
             for (int k = 0; k < NL; ++k) surf[l][k] = s_b[l] * bsum[l - 1][k] + s_s[l] * surf[l - 2][k]; /* Eq. 29 */
         for (int k = 0; k < NL && d0 + k < ndir; ++k)
             for (int l = 0; l <= lmax; ++l) {
-                const int at = (d0 + k) * SHL__ZH_STRIDE + l;
-                zh[at] = norm[l] * surf[l][k]; /* Wang Eq. 13 */
-                for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = norm[l] * gsum[ax][l][k];
-                for (int i = 0; i < 6; ++i) zh_hess[i * SHL__ZH_BLOCK + at] = norm[l] * hsum[i][l][k]; /* (H2) */
+                double *o = z10 + ((d0 + k) * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+                o[0] = norm[l] * surf[l][k]; /* Wang Eq. 13 */
+                for (int ax = 0; ax < 3; ++ax) o[1 + ax] = gnorm[l] * gsum[l][k][ax];
+                for (int i = 0; i < 6; ++i) o[4 + i] = hnorm[l] * hsum[l][k][i]; /* (H2) */
             }
     }
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as shl__poly_zh_grad_d */
         double area[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
-            for (int l = 0; l <= lmax; ++l) zh[dir * SHL__ZH_STRIDE + l] = area[dir * SHL__ZH_STRIDE + l];
+            for (int l = 0; l <= lmax; ++l) z10[(dir * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI] = area[dir * SHL__ZH_STRIDE + l];
     }
 }
 
-/* shl__zh_to_sh of the SHL__ZH_MULTI blocks zh + b zstride into out[b] (polygon.h): the same
- * sums in the same order (bit for bit shl__zh_to_sh), the blocks innermost with a fixed
- * count, so that the compiler keeps the accumulators in vector registers and loads each
- * weight once for all blocks. */
-void shl__zh_to_sh_multi(int lmax, const double *zh, size_t zstride, double *const out[SHL__ZH_MULTI])
+/* shl__zh_to_sh of the SHL__ZH_MULTI interleaved blocks of z10 into out[b] (polygon.h): the
+ * same sums in the same order (bit for bit shl__zh_to_sh of each block), the blocks
+ * innermost with a fixed count, so that the accumulators stay in vector registers and
+ * each weight is loaded once for all blocks. */
+void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI])
 {
     enum { MB = SHL__ZH_MULTI };
     for (int l = 0; l <= lmax; ++l) {
         double even[SHL_LMAX_MAX + 1][MB], odd[SHL_LMAX_MAX + 1][MB];
-        for (int b = 0; b < MB; ++b) {
-            const double *z = zh + (size_t)b * zstride;
-            even[0][b] = z[l];
-            for (int k = 1; k <= l; ++k) {
-                const double z1 = z[(2 * k - 1) * SHL__ZH_STRIDE + l], z2 = z[2 * k * SHL__ZH_STRIDE + l];
-                even[k][b] = z1 + z2;
-                odd[k - 1][b] = z1 - z2;
+        for (int b = 0; b < MB; ++b) even[0][b] = z10[l * MB + b];
+        for (int k = 1; k <= l; ++k) {
+            const double *z1 = z10 + ((2 * k - 1) * SHL__ZH_STRIDE + l) * MB, *z2 = z10 + (2 * k * SHL__ZH_STRIDE + l) * MB;
+            for (int b = 0; b < MB; ++b) {
+                even[k][b] = z1[b] + z2[b];
+                odd[k - 1][b] = z1[b] - z2[b];
             }
         }
         const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
@@ -243,14 +253,17 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     const int lmax = ctx->lmax, nc = ctx->nc;
     shl__poly_geom g;
-    double zh[10 * SHL__ZH_BLOCK]; /* ZH, 3 gradient blocks, 6 Hessian blocks */
+    double z10[SHL__ZH_MULTI * SHL__ZH_BLOCK]; /* ZH, gradient, Hessian interleaved (polygon.h) */
     shl__poly_geom_init(&g, x, verts, n);
-    shl__poly_zh_hess_d(&g, lmax, zh, zh + SHL__ZH_BLOCK, zh + 4 * SHL__ZH_BLOCK);
+    const int fold = shl__poly_hess_fold(&g);
+    shl__poly_zh_hess_d(&g, lmax, z10, fold);
     double *const out[SHL__ZH_MULTI] = {coeffs,       grad,         grad + nc,    grad + 2 * nc, hess,
                                         hess + nc,    hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    shl__zh_to_sh_multi(lmax, zh, SHL__ZH_BLOCK, out);
-    shl__poly_grad_unscale(&g, grad, 3 * nc);
-    shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */
-    shl__poly_grad_unscale(&g, hess, 6 * nc);
+    shl__zh_to_sh_multi(lmax, z10, out);
+    if (!fold) {
+        shl__poly_grad_unscale(&g, grad, 3 * nc);
+        shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */
+        shl__poly_grad_unscale(&g, hess, 6 * nc);
+    }
     return SHL_OK;
 }

@@ -19,16 +19,15 @@
 #include "zh_tables.h"
 #include <math.h>
 
-void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *zh, double *zh_grad, double *zh_hess)
+void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
 {
     const int ndir = 2 * lmax + 1;
     if (g->inside) { /* the whole sphere of directions: constant */
         for (int d = 0; d < ndir; ++d)
             for (int l = 0; l <= lmax; ++l) {
-                const int at = d * SHL__ZH_STRIDE + l;
-                zh[at] = l == 0 ? sqrt(4.0 * M_PI) : 0.0;
-                for (int a = 0; a < 3; ++a) zh_grad[a * SHL__ZH_BLOCK + at] = 0.0;
-                for (int i = 0; i < 6; ++i) zh_hess[i * SHL__ZH_BLOCK + at] = 0.0;
+                double *o = z10 + (d * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+                o[0] = l == 0 ? sqrt(4.0 * M_PI) : 0.0;
+                for (int b = 1; b < SHL__ZH_MULTI; ++b) o[b] = 0.0;
             }
         return;
     }
@@ -66,14 +65,14 @@ void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *zh, double
         }
         double p = 1.0, p_prev = 0.0, dp = 0.0, dp_prev = 0.0, d2p = 0.0, d2p_prev = 0.0; /* P_l, P_l', P_l'' at z */
         for (int l = 0; l <= lmax; ++l) {
-            const int at = d * SHL__ZH_STRIDE + l;
-            zh[at] = cw[l][0] * p;
+            double *o = z10 + (d * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+            o[0] = cw[l][0] * p;
             const double radial = cw[l][1] * p, tang = cw[l][3] * dp; /* dZ/dx = -radial u - tang tau */
-            for (int a = 0; a < 3; ++a) zh_grad[a * SHL__ZH_BLOCK + at] = (-radial * u[a] - tang * tau[a]) * sc;
+            for (int a = 0; a < 3; ++a) o[1 + a] = (-radial * u[a] - tang * tau[a]) * sc;
             const double ca = cw[l][2] * p, cb = (radial - cw[l][3] * z * dp) * id; /* (S4) */
             const double cc = dp * (cw[l][1] - cw[l][3]) * id, cd = cw[l][0] * d2p * id * id;
             for (int i = 0; i < 6; ++i)
-                zh_hess[i * SHL__ZH_BLOCK + at] = (ca * uu[i] + cb * pr[i] + cc * ut[i] + cd * tt[i]) * sc * sc;
+                o[4 + i] = (ca * uu[i] + cb * pr[i] + cc * ut[i] + cd * tt[i]) * sc * sc;
             const double pn = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
             const double dpn = dp_prev + (2.0 * l + 1.0) * p, d2pn = d2p_prev + (2.0 * l + 1.0) * dp;
             p_prev = p, p = pn, dp_prev = dp, dp = dpn, d2p_prev = d2p, d2p = d2pn;
@@ -91,11 +90,11 @@ int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3
     shl__sphere_geom g;
     shl__sphere_geom_init(&g, x, center, radius);
     shl__sphere_sh_d(lmax, &g, coeffs, grad); /* as shl_sphere_grad, bit for bit */
-    double zh[10 * SHL__ZH_BLOCK];
-    shl__sphere_zh_hess(&g, lmax, zh, zh + SHL__ZH_BLOCK, zh + 4 * SHL__ZH_BLOCK);
+    double z10[SHL__ZH_MULTI * SHL__ZH_BLOCK];
+    shl__sphere_zh_hess(&g, lmax, z10);
     double scratch[4 * SHL_NCOEFFS(SHL_LMAX_MAX)]; /* value and gradient again: those above are kept */
     double *const out[SHL__ZH_MULTI] = {scratch,   scratch + nc,  scratch + 2 * nc, scratch + 3 * nc, hess,
                                         hess + nc, hess + 2 * nc, hess + 3 * nc,    hess + 4 * nc,    hess + 5 * nc};
-    shl__zh_to_sh_multi(lmax, zh, SHL__ZH_BLOCK, out);
+    shl__zh_to_sh_multi(lmax, z10, out);
     return SHL_OK;
 }
