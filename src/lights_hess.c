@@ -10,10 +10,7 @@
 
 enum { NBLK = SHL__ZH_MULTI }; /* value, 3 gradient, 6 Hessian components, interleaved (polygon.h) */
 
-/* Accumulator: lobes d <= 2 lmax, bands l <= lmax (as lights.c), NBLK values each. */
-static size_t acc_size(int lmax) { return ((size_t)(2 * lmax) * SHL__ZH_STRIDE + (size_t)lmax + 1) * NBLK; }
-
-size_t shl__lights_hess_ws_size(int lmax) { return NBLK * (size_t)SHL__ZH_BLOCK + 3 * acc_size(lmax); }
+size_t shl__lights_hess_ws_size(int lmax) { return 4 * (size_t)SHL__Z10_SIZE(lmax); } /* one light, 3 colours */
 
 /* The interleaved lobe integrals of one unit-radiance light at x, unscaled; 0 if it does not reach x. */
 static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lmax, const double x[3], double *z10)
@@ -29,7 +26,7 @@ static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lma
         if (!fold) /* gradient: 2^-E once, Hessian: twice */
             for (int d = 0; d <= 2 * lmax; ++d)
                 for (int l = 0; l <= lmax; ++l) {
-                    double *o = z10 + (d * SHL__ZH_STRIDE + l) * NBLK;
+                    double *o = z10 + SHL__Z10(lmax, d, l);
                     shl__poly_grad_unscale(&g, o + 1, NBLK - 1);
                     shl__poly_grad_unscale(&g, o + 4, NBLK - 4);
                 }
@@ -48,9 +45,9 @@ static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lma
 void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const double x[3], double *rgb,
                            double *grad, double *hess)
 {
-    const int nc = SHL_NCOEFFS(lmax), ndir = 2 * lmax + 1;
-    const size_t na = acc_size(lmax);
-    double *z10 = ws, *acc = ws + NBLK * SHL__ZH_BLOCK; /* colour c at c * na */
+    const int nc = SHL_NCOEFFS(lmax);
+    const size_t na = (size_t)SHL__Z10_SIZE(lmax);
+    double *z10 = ws, *acc = ws + na; /* colour c at c * na */
     memset(acc, 0, sizeof(double) * 3 * na);
     for (int i = 0; i < lights->count; ++i) {
         const shl__light *li = &lights->items[i];
@@ -58,10 +55,7 @@ void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const
         for (int c = 0; c < 3; ++c) {
             const double s = li->rgb[c];
             double *dst = acc + c * na;
-            for (int d = 0; d < ndir; ++d) {
-                const size_t row = (size_t)d * SHL__ZH_STRIDE * NBLK;
-                for (size_t j = 0; j < (size_t)(lmax + 1) * NBLK; ++j) dst[row + j] += s * z10[row + j];
-            }
+            for (size_t j = 0; j < na; ++j) dst[j] += s * z10[j];
         }
     }
     for (int c = 0; c < 3; ++c) {

@@ -44,13 +44,15 @@ void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
 
-/* Value, gradient and Hessian of the ZH integrals interleaved ("z10" layout):
- * z10[(d * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI + b], b = 0 the value (as shl__poly_zh_grad_d),
+/* Value, gradient and Hessian of the ZH integrals interleaved ("z10" layout, lobes d <= 2 lmax,
+ * bands l <= lmax, packed): z10[SHL__Z10(lmax, d, l) + b], b = 0 the value (as shl__poly_zh_grad_d),
  * 1..3 d/dx, d/dy, d/dz, 4..9 the second derivatives xx, xy, xz, yy, yz, zz (polygon_hess.c).
  * unscaled = 0: in scaled units (the caller multiplies the gradient by grad_scale, the
  * Hessian by grad_scale twice); unscaled = 1 (only when shl__poly_hess_fold(g)): the
  * factors 2^-E, 2^-2E folded into the band weights. */
 #define SHL__ZH_MULTI 10
+#define SHL__Z10(lmax, d, l) (((d) * ((lmax) + 1) + (l)) * SHL__ZH_MULTI)
+#define SHL__Z10_SIZE(lmax) ((2 * (lmax) + 1) * ((lmax) + 1) * SHL__ZH_MULTI)
 void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int unscaled);
 /* 1 when 2^-E and 2^-2E times every band weight K_l (<= 2.5) are normal doubles
  * (2^-2E in [2^-1000, 2^1000]): a power of two commutes with every rounding, so folding

@@ -1,7 +1,7 @@
 /* Second spatial derivatives of the polygon's ZH integrals, the recurrence of
  * Wang & Ramamoorthi 2018 (Alg. 1) and Wu et al. 2020's gradient (polygon_zh.h)
- * extended one order.  Derivation: /work/notes/hessian-derivation.md (README,
- * "Hessians"); the equation numbers (H1)-(H6) below refer to it.
+ * extended one order.  The equation numbers (H1)-(H6) are those of the derivation
+ * note (README, "Hessians"), summarized here.
  *
  * Edge e as a straight segment: r(s) = v_e - x + s t (t its unit direction),
  * q the foot of x on its line, rho = |q|, f = 1/|r| = g . w(t) with g = q/rho^2
@@ -191,7 +191,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
             for (int k = 0; k < NL; ++k) surf[l][k] = s_b[l] * bsum[l - 1][k] + s_s[l] * surf[l - 2][k]; /* Eq. 29 */
         for (int k = 0; k < NL && d0 + k < ndir; ++k)
             for (int l = 0; l <= lmax; ++l) {
-                double *o = z10 + ((d0 + k) * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+                double *o = z10 + SHL__Z10(lmax, d0 + k, l);
                 o[0] = norm[l] * surf[l][k]; /* Wang Eq. 13 */
                 for (int ax = 0; ax < 3; ++ax) o[1 + ax] = gnorm[l] * gsum[l][k][ax];
                 for (int i = 0; i < 6; ++i) o[4 + i] = hnorm[l] * hsum[l][k][i]; /* (H2) */
@@ -201,7 +201,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
         double area[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
-            for (int l = 0; l <= lmax; ++l) z10[(dir * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI] = area[dir * SHL__ZH_STRIDE + l];
+            for (int l = 0; l <= lmax; ++l) z10[SHL__Z10(lmax, dir, l)] = area[dir * SHL__ZH_STRIDE + l];
     }
 }
 
@@ -216,7 +216,7 @@ void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_
         double even[SHL_LMAX_MAX + 1][MB], odd[SHL_LMAX_MAX + 1][MB];
         for (int b = 0; b < MB; ++b) even[0][b] = z10[l * MB + b];
         for (int k = 1; k <= l; ++k) {
-            const double *z1 = z10 + ((2 * k - 1) * SHL__ZH_STRIDE + l) * MB, *z2 = z10 + (2 * k * SHL__ZH_STRIDE + l) * MB;
+            const double *z1 = z10 + SHL__Z10(lmax, 2 * k - 1, l), *z2 = z10 + SHL__Z10(lmax, 2 * k, l);
             for (int b = 0; b < MB; ++b) {
                 even[k][b] = z1[b] + z2[b];
                 odd[k - 1][b] = z1[b] - z2[b];
@@ -253,7 +253,7 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     const int lmax = ctx->lmax, nc = ctx->nc;
     shl__poly_geom g;
-    double z10[SHL__ZH_MULTI * SHL__ZH_BLOCK]; /* ZH, gradient, Hessian interleaved (polygon.h) */
+    double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)]; /* ZH, gradient, Hessian interleaved (polygon.h) */
     shl__poly_geom_init(&g, x, verts, n);
     const int fold = shl__poly_hess_fold(&g);
     shl__poly_zh_hess_d(&g, lmax, z10, fold);

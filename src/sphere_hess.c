@@ -25,7 +25,7 @@ void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
     if (g->inside) { /* the whole sphere of directions: constant */
         for (int d = 0; d < ndir; ++d)
             for (int l = 0; l <= lmax; ++l) {
-                double *o = z10 + (d * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+                double *o = z10 + SHL__Z10(lmax, d, l);
                 o[0] = l == 0 ? sqrt(4.0 * M_PI) : 0.0;
                 for (int b = 1; b < SHL__ZH_MULTI; ++b) o[b] = 0.0;
             }
@@ -65,7 +65,7 @@ void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
         }
         double p = 1.0, p_prev = 0.0, dp = 0.0, dp_prev = 0.0, d2p = 0.0, d2p_prev = 0.0; /* P_l, P_l', P_l'' at z */
         for (int l = 0; l <= lmax; ++l) {
-            double *o = z10 + (d * SHL__ZH_STRIDE + l) * SHL__ZH_MULTI;
+            double *o = z10 + SHL__Z10(lmax, d, l);
             o[0] = cw[l][0] * p;
             const double radial = cw[l][1] * p, tang = cw[l][3] * dp; /* dZ/dx = -radial u - tang tau */
             for (int a = 0; a < 3; ++a) o[1 + a] = (-radial * u[a] - tang * tau[a]) * sc;
@@ -90,7 +90,7 @@ int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3
     shl__sphere_geom g;
     shl__sphere_geom_init(&g, x, center, radius);
     shl__sphere_sh_d(lmax, &g, coeffs, grad); /* as shl_sphere_grad, bit for bit */
-    double z10[SHL__ZH_MULTI * SHL__ZH_BLOCK];
+    double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)];
     shl__sphere_zh_hess(&g, lmax, z10);
     double scratch[4 * SHL_NCOEFFS(SHL_LMAX_MAX)]; /* value and gradient again: those above are kept */
     double *const out[SHL__ZH_MULTI] = {scratch,   scratch + nc,  scratch + 2 * nc, scratch + 3 * nc, hess,
