@@ -26,6 +26,7 @@
 #include "shlight.h"
 #include "geom.h"
 #include "harness.h"
+#include "internal.h"
 #include "testutil.h"
 #include <float.h>
 #include <math.h>
@@ -525,6 +526,10 @@ SHL_TEST(hess_bad_input)
     CHECK(shl_lights_eval_hess(ctx, set, x, rgb, NULL, hs) == SHL_ENULL);
     CHECK(shl_lights_eval_hess(ctx, set, x, rgb, gr, NULL) == SHL_ENULL);
     CHECK(shl_lights_eval_hess(ctx, set, nan_x, rgb, gr, hs) == SHL_ENONFINITE);
+    shl__alloc_fail_after = 0; /* the per-call workspace */
+    const int st = shl_lights_eval_hess(ctx, set, x, rgb, gr, hs);
+    shl__alloc_fail_after = -1;
+    CHECK(st == SHL_ENOMEM);
     CHECK(guard_intact(c, N) && guard_intact(g, 3 * N) && guard_intact(h, 6 * N));
     CHECK(guard_intact(rgb, 3 * N) && guard_intact(gr, 9 * N) && guard_intact(hs, 18 * N));
     /* an empty set: zeros */
