@@ -29,6 +29,7 @@
  * but mu lies in the arc's plane, spanned by w_f and lambda_f, so per edge, lobe and band
  * H_e = q_w S(mu, w_f) + q_l S(mu, lambda_f) + s_m mu mu^T (three scalars). */
 #include "polygon.h"
+#include "quad.h"
 #include "zh_tables.h"
 #include <math.h>
 
@@ -43,10 +44,26 @@ static double x_minus_sin(double x)
     return x * x2 / 6.0 * t;
 }
 
+/* Edges seen nearly end-on (x close to the edge's line, far from the edge): (H3) adds G2 B_l,
+ * whose rounding (eps G2 T) is eps (r/rho)^2 of E_l = O(f^2 T) (r: distance to the nearer end),
+ * and Wu's I_l (relative error ~eps r/rho, harmless in the gradient, where the edge's term is
+ * small) enters (H2) times |g| = 1/rho: measured 1e-5 of the Hessian at r/rho = 3e5.  Beyond
+ * (r/rho)^2 = NEAR_RADIAL those edges take E_l, and I_l for (H2), by a Gauss-Legendre rule on
+ * the arc instead (the gradient keeps the recurrence's I_l, as shl__poly_zh_grad_d): both ends are then more than
+ * 100 rho from the foot, so T < 2 / 100 (each end within atan(1/100) of the direction of the
+ * line), and f^2 P_l(h(t)) is a trigonometric polynomial of frequency <= l + 2, whose
+ * Taylor terms at the arc's midpoint fall like (T (l + 2) / 2)^k / k! <= 0.32^k / k! at
+ * lmax 30: the NQ-point rule (exact for degree 2 NQ - 1) errs by < 0.32^16 / 16! < 1e-20
+ * relative to (r/rho)^2 f^2 T, i.e. < 1e-16 of E_l. */
+enum { NQ = 8 };
+#define NEAR_RADIAL 1e4
+
 /* Per-edge quantities of (H2)-(H6), scaled units. */
 typedef struct {
     double g2, e0, ffp1, fe2, ff2, dff2, gw, gl, dlw, dll;
     double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
+    int quad;                    /* E_l by the rule above */
+    double qc[NQ], qs[NQ], qf[NQ], qw[NQ]; /* its nodes t_j (cos, sin) and weights times f(t_j), f(t_j)^2 */
 } hess_edge;
 
 static void sym6(const double a[3], const double b[3], double out[6])
@@ -55,7 +72,7 @@ static void sym6(const double a[3], const double b[3], double out[6])
     for (int i = 0; i < 6; ++i) out[i] = 0.5 * (a[ia[i]] * b[ib[i]] + a[ib[i]] * b[ia[i]]);
 }
 
-static void hess_edge_init(const shl__poly_geom *g, int e, hess_edge *h)
+static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, const double *glw, hess_edge *h)
 {
     const int f = (e + 1 == g->n) ? 0 : e + 1;
     const double *gv = g->gvec[e], *mu = g->mu[e];
@@ -78,6 +95,11 @@ static void hess_edge_init(const shl__poly_geom *g, int e, hess_edge *h)
     sym6(mu, g->w[f], h->tw);
     sym6(mu, lf, h->tl);
     sym6(mu, mu, h->tm);
+    h->quad = glx && h->g2 > NEAR_RADIAL * fmax(h->fe2, h->ff2);
+    for (int j = 0; h->quad && j < NQ; ++j) {
+        const double t = 0.5 * gam * (1.0 + glx[j]), c = cos(t), sn = sin(t), ft = fe * c + fpe * sn;
+        h->qc[j] = c, h->qs[j] = sn, h->qf[j] = 0.5 * gam * glw[j] * ft, h->qw[j] = h->qf[j] * ft;
+    }
 }
 
 enum { NL = 2 }; /* lobes side by side, as SHL__ZH_LANES in polygon_zh.h */
@@ -97,7 +119,16 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
     hess_edge he[SHL_MAX_VERTS];
-    for (int e = 0; e < n; ++e) hess_edge_init(g, e, &he[e]);
+    double glx[NQ], glw[NQ];
+    int any_radial = 0;
+    for (int e = 0; e < n; ++e) {
+        hess_edge_init(g, e, NULL, NULL, &he[e]);
+        any_radial |= he[e].g2 > NEAR_RADIAL * fmax(he[e].fe2, he[e].ff2);
+    }
+    if (any_radial) { /* rare: the rule's nodes only then */
+        shl__gauss_legendre(NQ, glx, glw);
+        for (int e = 0; e < n; ++e) hess_edge_init(g, e, glx, glw, &he[e]);
+    }
     for (int d0 = 0; d0 < ndir; d0 += NL) {
         const double *lobe[NL];
         for (int k = 0; k < NL; ++k) lobe[k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1];
@@ -118,7 +149,22 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
             double i1[NL], j1[NL], j2[NL], e1[NL], m1[NL], m2[NL];
             /* per band: I_l, c M_l, P_l(a_e), dP_l of the two lanes (contracted after the recurrence) */
             double ei[SHL_LMAX_MAX + 1][NL], em[SHL_LMAX_MAX + 1][NL], ep[SHL_LMAX_MAX + 1][NL],
-                edp[SHL_LMAX_MAX + 1][NL];
+                edp[SHL_LMAX_MAX + 1][NL], eq[SHL_LMAX_MAX + 1][NL], eqi[SHL_LMAX_MAX + 1][NL];
+            if (h->quad) /* E_l and I_l by the Gauss rule (NEAR_RADIAL) */
+                for (int k = 0; k < NL; ++k) {
+                    const double ae = shl__dot3(lobe[k], g->w[e]), be = shl__dot3(lobe[k], g->lam[e]);
+                    for (int l = 0; l <= lmax; ++l) eq[l][k] = eqi[l][k] = 0.0;
+                    for (int j = 0; j < NQ; ++j) {
+                        const double z = ae * h->qc[j] + be * h->qs[j];
+                        double q0 = 0.0, q1 = 1.0; /* P_{l-1}, P_l at l = 0 */
+                        for (int l = 0; l <= lmax; ++l) {
+                            eq[l][k] += h->qw[j] * q1;
+                            eqi[l][k] += h->qf[j] * q1;
+                            const double q2 = ((2.0 * l + 1.0) * z * q1 - l * q0) * inv_l[l + 1];
+                            q0 = q1, q1 = q2;
+                        }
+                    }
+                }
 #pragma GCC unroll 8
             for (int k = 0; k < NL; ++k) {
                 const double *u = lobe[k];
@@ -164,6 +210,18 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                     m2[k] = m1[k], m1[k] = ml, e1[k] = el;
                 }
             }
+            if (h->quad) /* c M_l (H4) from the rule's E_l */
+                for (int k = 0; k < NL; ++k) {
+                    const double ck = shl__dot3(lobe[k], g->mu[e]);
+                    double mm2 = 0.0, mm1 = eq[0][k];
+                    for (int l = 2; l <= lmax; ++l) {
+                        const double ml = (2.0 * l - 1.0) * eq[l - 1][k] + mm2;
+                        mm2 = mm1, mm1 = ml;
+                        em[l][k] = ck * ml;
+                    }
+                    if (lmax >= 1) em[1][k] = ck * eq[0][k];
+                }
+            const double(*ih)[NL] = h->quad ? (const double(*)[NL])eqi : (const double(*)[NL])ei; /* I_l of (H2) */
             const double mu[4] = {g->mu[e][0], g->mu[e][1], g->mu[e][2], 0.0};
             double tw[6], tl[6], tm[6];
             for (int i = 0; i < 6; ++i) tw[i] = h->tw[i], tl[i] = h->tl[i], tm[i] = h->tm[i];
@@ -172,14 +230,14 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
             for (int l = 0; l <= lmax; ++l) {
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
-                    const double il = ei[l][k], sm = em[l][k];
+                    const double il = ih[l][k], sm = em[l][k];
                     const double al = dff2 * ep[l][k] + ff2 * edp[l][k], bl = fe2 * ep[l][k]; /* (H6) */
                     const double qw = il * gw2 - bl * dlw, ql = il * gl2 - al - bl * dll;
                     double *hp = hsum[l][k], *gp = gsum[l][k];
 #pragma GCC unroll 6
                     for (int i = 0; i < 6; ++i) hp[i] += qw * tw[i] + ql * tl[i] - sm * tm[i];
 #pragma GCC unroll 4
-                    for (int ax = 0; ax < 4; ++ax) gp[ax] += mu[ax] * il; /* Wu Eq. 11 */
+                    for (int ax = 0; ax < 4; ++ax) gp[ax] += mu[ax] * ei[l][k]; /* Wu Eq. 11 */
                 }
             }
         }

@@ -389,6 +389,40 @@ SHL_TEST(hess_scaling_and_translation)
     shl_ctx_destroy(ctx);
 }
 
+SHL_TEST(hess_edge_seen_end_on)
+{
+    /* x close to the line of an edge, far from the edge (r/rho = 3e2 .. 3e5): the Hessian is
+     * invariant under translating x and the light together, so the spread over translations
+     * (which round the inputs differently) measures its rounding error: the recurrence's
+     * G2 B_l and |g| I_l terms gave 1.8e-5 of max|H| at r/rho = 3e5 before those edges went to
+     * the Gauss rule (polygon_hess.c, NEAR_RADIAL); now a few eps times the growth of H over
+     * the input's rounding (rho/r ~ 1e-5 of eps |x| / rho: below 1e-12). */
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(8, &ctx) == SHL_OK);
+    const int nc = 81;
+    const double v[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    static double c[81], g[243], h0[486], h1[486];
+    double worst = 0.0;
+    const double offs[3] = {1e-2, 1e-3, 1e-5};
+    for (int p = 0; p < 3; ++p) {
+        const double x[3] = {3.0, offs[p], 0.5 * offs[p]}; /* beyond v_1 on the line of edge (v_0, v_1) */
+        CHECK(shl_polygon_hess(ctx, x, v, 4, c, g, h0) == SHL_OK);
+        double m = 0.0;
+        for (int k = 0; k < 6 * nc; ++k) m = fmax(m, fabs(h0[k]));
+        for (int t = 1; t < 12; ++t) {
+            const double sh[3] = {0.1234567 * t, -0.0987654 * t, 0.0555555 * t};
+            double vs[12], xs[3];
+            for (int i = 0; i < 12; ++i) vs[i] = v[i] + sh[i % 3];
+            for (int k = 0; k < 3; ++k) xs[k] = x[k] + sh[k];
+            CHECK(shl_polygon_hess(ctx, xs, vs, 4, c, g, h1) == SHL_OK);
+            for (int k = 0; k < 6 * nc; ++k) worst = fmax(worst, fabs(h1[k] - h0[k]) / m);
+        }
+    }
+    CHECK(worst <= 1e-12);
+    harness_note("translation spread of H / max|H| at r/rho up to 3e5: %.1e", worst);
+    shl_ctx_destroy(ctx);
+}
+
 SHL_TEST(hess_special_points)
 {
     shl_ctx *ctx;
