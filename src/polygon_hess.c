@@ -263,19 +263,19 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
     }
 }
 
-/* shl__zh_to_sh of the SHL__ZH_MULTI interleaved blocks of z10 into out[b] (polygon.h): the
- * same sums in the same order (bit for bit shl__zh_to_sh of each block), the blocks
- * innermost with a fixed count, so that the accumulators stay in vector registers and
- * each weight is loaded once for all blocks. */
-void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI])
+/* shl__zh_to_sh of the nb interleaved blocks b0 .. b0+nb-1 of z10 into out[0 .. nb-1]
+ * (polygon.h): the same sums in the same order (bit for bit shl__zh_to_sh of each block),
+ * the blocks innermost with a count fixed at each (inlined) call, so that the accumulators
+ * stay in vector registers and each weight is loaded once for all blocks. */
+static inline void zh_to_sh_blocks(int lmax, const double *z10, int b0, int nb, double *const *out)
 {
     enum { MB = SHL__ZH_MULTI };
     for (int l = 0; l <= lmax; ++l) {
         double even[SHL_LMAX_MAX + 1][MB], odd[SHL_LMAX_MAX + 1][MB];
-        for (int b = 0; b < MB; ++b) even[0][b] = z10[l * MB + b];
+        for (int b = 0; b < nb; ++b) even[0][b] = z10[SHL__Z10(lmax, 0, l) + b0 + b];
         for (int k = 1; k <= l; ++k) {
-            const double *z1 = z10 + SHL__Z10(lmax, 2 * k - 1, l), *z2 = z10 + SHL__Z10(lmax, 2 * k, l);
-            for (int b = 0; b < MB; ++b) {
+            const double *z1 = z10 + SHL__Z10(lmax, 2 * k - 1, l) + b0, *z2 = z10 + SHL__Z10(lmax, 2 * k, l) + b0;
+            for (int b = 0; b < nb; ++b) {
                 even[k][b] = z1[b] + z2[b];
                 odd[k - 1][b] = z1[b] - z2[b];
             }
@@ -287,20 +287,30 @@ void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_
             for (int k = 0; k <= l; ++k) {
                 const double w = we[m * (l + 1) + k];
 #pragma GCC unroll 16
-                for (int b = 0; b < MB; ++b) acc[b] += w * even[k][b];
+                for (int b = 0; b < nb; ++b) acc[b] += w * even[k][b];
             }
-            for (int b = 0; b < MB; ++b) out[b][base + m] = acc[b];
+            for (int b = 0; b < nb; ++b) out[b][base + m] = acc[b];
         }
         for (int m = 1; m <= l; ++m) {
             double acc[MB] = {0};
             for (int k = 0; k < l; ++k) {
                 const double w = wo[(m - 1) * l + k];
 #pragma GCC unroll 16
-                for (int b = 0; b < MB; ++b) acc[b] += w * odd[k][b];
+                for (int b = 0; b < nb; ++b) acc[b] += w * odd[k][b];
             }
-            for (int b = 0; b < MB; ++b) out[b][base - m] = acc[b];
+            for (int b = 0; b < nb; ++b) out[b][base - m] = acc[b];
         }
     }
+}
+
+void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI])
+{
+    zh_to_sh_blocks(lmax, z10, 0, SHL__ZH_MULTI, out);
+}
+
+void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6])
+{
+    zh_to_sh_blocks(lmax, z10, 4, 6, out);
 }
 
 int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n, double *coeffs,

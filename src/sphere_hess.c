@@ -34,26 +34,30 @@ void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
     /* scaled units (sphere.h): 1/dist and k in units 2^e; results times 2^-e (gradient), 2^-2e (Hessian) */
     const double id = g->inv_d_s, k = g->k_alpha_s, sc = g->grad_scale[0] * g->grad_scale[1];
     const double phi2 = -k * id * (3.0 + g->s2 / (g->c * g->c)); /* (S1) */
-    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], cw[SHL_LMAX_MAX + 1][4];
+    /* 2^-e (gradient) and 2^-2e (Hessian) folded into the per-band factors when that keeps
+     * them normal (a power of two: the same values as multiplying afterwards), else after */
+    const int fold = sc >= 0x1p-500 && sc <= 0x1p500;
+    const double gs = fold ? sc : 1.0, hs = fold ? sc * sc : 1.0;
+    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], cw[SHL_LMAX_MAX + 1][7], ra[SHL_LMAX_MAX + 1], rb[SHL_LMAX_MAX + 1];
     shl__cap_weights_d(lmax, g->t, g->s2, g->c, w, dw);
     double pc = 1.0, pc_prev = 0.0, dpc = 0.0, dpc_prev = 0.0; /* P_l(c), P_l'(c) */
     for (int l = 0; l <= lmax; ++l) {
         const double kl = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)), d2w = -2.0 * M_PI * dpc; /* w_l'' */
+        ra[l] = (2.0 * l + 1.0) / (l + 1.0), rb[l] = l / (l + 1.0); /* P_{l+1} = ra z P_l - rb P_{l-1} */
         cw[l][0] = kl * w[l];
-        cw[l][1] = kl * dw[l] * k;                       /* K w' k */
-        cw[l][2] = kl * (d2w * k * k + dw[l] * phi2);    /* K (w'' k^2 + w' phi'') */
-        cw[l][3] = kl * w[l] * id;                       /* K w / dist */
-        const double pn = ((2.0 * l + 1.0) * g->c * pc - l * pc_prev) / (l + 1.0);
+        cw[l][1] = kl * dw[l] * k * gs;                        /* K w' k: gradient */
+        cw[l][2] = kl * w[l] * id * gs;                        /* K w / dist */
+        cw[l][3] = kl * (d2w * k * k + dw[l] * phi2) * hs;     /* (S4): A / P_l */
+        cw[l][4] = kl * dw[l] * k * id * hs;                   /* B = (c4 P_l - c5 z P_l') */
+        cw[l][5] = kl * w[l] * id * id * hs;                   /* C = (c4 - c5) P_l', D = c5 P_l'' */
+        const double pn = ra[l] * g->c * pc - rb[l] * pc_prev;
         const double dpn = dpc_prev + (2.0 * l + 1.0) * pc; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
         pc_prev = pc, pc = pn, dpc_prev = dpc, dpc = dpn;
     }
     const double *u = g->u;
     static const int ia[6] = {0, 0, 0, 1, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 2};
-    double uu[6], pr[6];
-    for (int i = 0; i < 6; ++i) {
-        uu[i] = u[ia[i]] * u[ib[i]];
-        pr[i] = (ia[i] == ib[i]) - uu[i]; /* I - u u^T */
-    }
+    double uu[6];
+    for (int i = 0; i < 6; ++i) uu[i] = u[ia[i]] * u[ib[i]];
     for (int d = 0; d < ndir; ++d) {
         const double *dir = shl__zh_dir[d];
         const double z = fmin(1.0, fmax(-1.0, shl__dot3(dir, u)));
@@ -67,17 +71,25 @@ void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
         for (int l = 0; l <= lmax; ++l) {
             double *o = z10 + SHL__Z10(lmax, d, l);
             o[0] = cw[l][0] * p;
-            const double radial = cw[l][1] * p, tang = cw[l][3] * dp; /* dZ/dx = -radial u - tang tau */
-            for (int a = 0; a < 3; ++a) o[1 + a] = (-radial * u[a] - tang * tau[a]) * sc;
-            const double ca = cw[l][2] * p, cb = (radial - cw[l][3] * z * dp) * id; /* (S4) */
-            const double cc = dp * (cw[l][1] - cw[l][3]) * id, cd = cw[l][0] * d2p * id * id;
-            for (int i = 0; i < 6; ++i)
-                o[4 + i] = (ca * uu[i] + cb * pr[i] + cc * ut[i] + cd * tt[i]) * sc * sc;
-            const double pn = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
+            const double radial = cw[l][1] * p, tang = cw[l][2] * dp; /* dZ/dx = -radial u - tang tau */
+            for (int a = 0; a < 3; ++a) o[1 + a] = -radial * u[a] - tang * tau[a];
+            /* (S4) with I - u u^T expanded: (A - B) u u^T + B I + C (u tau^T + tau u^T) + D tau tau^T */
+            const double cb = cw[l][4] * p - cw[l][5] * z * dp, ca = cw[l][3] * p - cb;
+            const double cc = (cw[l][4] - cw[l][5]) * dp, cd = cw[l][5] * d2p;
+            for (int i = 0; i < 6; ++i) o[4 + i] = ca * uu[i] + cc * ut[i] + cd * tt[i];
+            o[4] += cb, o[7] += cb, o[9] += cb;
+            const double pn = ra[l] * z * p - rb[l] * p_prev;
             const double dpn = dp_prev + (2.0 * l + 1.0) * p, d2pn = d2p_prev + (2.0 * l + 1.0) * dp;
             p_prev = p, p = pn, dp_prev = dp, dp = dpn, d2p_prev = d2p, d2p = d2pn;
         }
     }
+    if (!fold) /* back from scaled units, in double (internal.h) */
+        for (int d = 0; d < ndir; ++d)
+            for (int l = 0; l <= lmax; ++l) {
+                double *o = z10 + SHL__Z10(lmax, d, l);
+                for (int b = 1; b < SHL__ZH_MULTI; ++b) o[b] = o[b] * sc;
+                for (int b = 4; b < SHL__ZH_MULTI; ++b) o[b] = o[b] * sc;
+            }
 }
 
 int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
@@ -92,9 +104,7 @@ int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3
     shl__sphere_sh_d(lmax, &g, coeffs, grad); /* as shl_sphere_grad, bit for bit */
     double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)];
     shl__sphere_zh_hess(&g, lmax, z10);
-    double scratch[4 * SHL_NCOEFFS(SHL_LMAX_MAX)]; /* value and gradient again: those above are kept */
-    double *const out[SHL__ZH_MULTI] = {scratch,   scratch + nc,  scratch + 2 * nc, scratch + 3 * nc, hess,
-                                        hess + nc, hess + 2 * nc, hess + 3 * nc,    hess + 4 * nc,    hess + 5 * nc};
-    shl__zh_to_sh_multi(lmax, z10, out);
+    double *const out[6] = {hess, hess + nc, hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
+    shl__zh_to_sh_hess6(lmax, z10, out);
     return SHL_OK;
 }
