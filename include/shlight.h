@@ -350,11 +350,12 @@ int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3
  * the sphere's cap w_l(cos a) Y_lm(axis) differentiated twice through its lobe
  * integrals (derivation in README, "Hessians").  Same validation and statuses as
  * the gradient functions (all pointers required); nothing is written on error.
- * Polygon: the Hessian grows like 1/distance^2 near an edge (rounding error ~eps
- * times that growth, as the gradient's); in the polygon's plane coeffs, grad and
- * hess are 0 (not differentiable there); near the plane the Hessian is taken from
- * the boundary sums (error ~eps dmin / height of the solid angle's scale over the
- * distance squared) while the coefficients use shl_polygon's planar rule.
+ * Polygon: the Hessian grows like 1/distance^2 near an edge (rounding error ~eps times
+ * that growth, as the gradient's); in the polygon's plane coeffs, grad and hess are 0 (not
+ * differentiable there); near the plane the Hessian is taken from the boundary sums (error
+ * ~eps dmin / height of its scale) while the coefficients use shl_polygon's planar rule;
+ * edges seen nearly end-on (x much closer to an edge's line than to the edge) take their
+ * new edge integrals from a Gauss rule on the arc, so no (distance ratio)^2 loss there.
  * Sphere: analytic outside, growing like (|center - x| - radius)^(-3/2) towards the
  * surface; inside or on it the coefficients are constant and grad, hess are 0.
  */
