@@ -70,7 +70,7 @@ typedef struct shl_ctx shl_ctx;
  *  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create(int lmax, shl_ctx **out);
 /** As shl_ctx_create, with the batch kernels of the instruction set named isa
- *  ("scalar", "avx2", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
+ *  ("scalar", "avx2", "avx512", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
  *  isa NULL: SHL_ENULL; not compiled in or not supported by this CPU and OS:
  *  SHL_EDOMAIN ("scalar" always succeeds).  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create_isa(int lmax, const char *isa, shl_ctx **out);
@@ -728,10 +728,12 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
 
 /**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with
- * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
+ * AVX2 and FMA, YMM state enabled by the OS), "avx512" (x86-64 with AVX-512 F,
+ * DQ, VL and BW besides, opmask and ZMM state enabled by the OS) or "neon"
+ * (AArch64); "" for NULL.
  * Chosen at shl_ctx_create: the best one compiled in and supported, unless the
  * environment variable SHLIGHT_ISA names another compiled-in, supported one
- * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.  Or
+ * (scalar | avx2 | avx512 | neon); any other value of SHLIGHT_ISA is ignored.  Or
  * given explicitly to shl_ctx_create_isa.
  */
 const char *shl_ctx_isa(const shl_ctx *ctx);

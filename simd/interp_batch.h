@@ -16,7 +16,9 @@
  * and a last block at n - VL, which overlaps the previous one and rewrites the
  * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient) run
  * the reference: a zero-padded copy measured 4-8x slower than it
- * (bench/bench_interp.c, lmax 0). */
+ * (bench/bench_interp.c, lmax 0).  A helper may name a narrower ISA's kernel
+ * for them instead, SHL_INTERP_SHORT_ROWS (avx512: lmax 1, 4 coefficients, on
+ * the avx2 kernel). */
 #include "kernel_api.h"
 
 #define ISA(name) SHL_ISA_SUFFIX(name)
@@ -28,6 +30,9 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
 }
 #else
 #define VL SHL_VDLEN
+#ifdef SHL_INTERP_SHORT_ROWS
+void SHL_INTERP_SHORT_ROWS(const float *data, int method, int nc, const shl__interp_point *s, double *out);
+#endif
 
 /* The point's weights (shl__interp_point), broadcast. */
 typedef struct {
@@ -113,8 +118,12 @@ static void hermite(const float *const f[8], const weights *W, int nc, double *o
 
 void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, double *out)
 {
-    if (nc < VL) { /* rows shorter than a vector: nothing to vectorize */
+    if (nc < VL) { /* rows shorter than a vector: nothing to vectorize at this width */
+#ifdef SHL_INTERP_SHORT_ROWS
+        SHL_INTERP_SHORT_ROWS(data, method, nc, s, out);
+#else
         shl__interp_ref_f(data, method, nc, s, out);
+#endif
         return;
     }
     const float *f[8];
