@@ -28,6 +28,7 @@
 #include "harness.h"
 #include "internal.h"
 #include "testutil.h"
+#include "fd_check.h"
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -196,6 +197,68 @@ SHL_TEST(hess_sphere_vs_fd_gradient)
     harness_note("max |H - R(h)| / max|H| %.1e (a-posteriori truncation %.1e), vs the O(h^6) level %.1e (48 spheres, "
                  "lmax 8 and %d)",
                  worst, worst_tr, worst_tight, LM);
+}
+
+/* The same against fd_check.h (the project's FD check with a derived tolerance): the 6th- vs
+ * 8th-order differences of the gradient give the truncation, E = 1e-13 max|G| its evaluation
+ * error (the gradients' rounding, measured ~1e-15; the margin covers the near-edge cases), and
+ * E_g = 1e-10 max|H| the Hessian's allowance; step h = the power of two below rho/32. */
+typedef struct {
+    const shl_ctx *ctx;
+    const light_t *li;
+} grad_arg;
+
+static void grad_values(void *arg, const double x[3], double *out)
+{
+    const grad_arg *a = arg;
+    static double c[NCM];
+    CHECK(light_grad(a->ctx, a->li, x, c, out) == SHL_OK);
+}
+
+SHL_TEST(hess_vs_fd_check)
+{
+    rng_t r = {1905};
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(8, &ctx) == SHL_OK);
+    const int nc = 81;
+    static double c[NCM], g[3 * NCM], hs[6 * NCM], gh[9 * NCM];
+    double worst = 0.0;
+    for (int it = 0; it < 24; ++it) {
+        light_t li;
+        double x[3], rho;
+        if (it & 1) {
+            double dir[3];
+            rng_unit_vector(&r, dir);
+            const double d = rng_range(&r, 0.5, 4.0);
+            li.sphere = 1, li.radius = d * rng_range(&r, 0.05, 0.95);
+            for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.0, 1.0), li.center[k] = x[k] + d * dir[k];
+            rho = d - li.radius;
+        } else {
+            random_polygon_light(&r, 3 + it % 4, it % 3 == 2, &li);
+            do {
+                for (int k = 0; k < 3; ++k) x[k] = rng_range(&r, -1.5, 1.5);
+                rho = plane_distance(li.verts, li.n, x);
+            } while (rho < 1e-2);
+        }
+        CHECK(light_hess(ctx, &li, x, c, g, hs) == SHL_OK);
+        double hm = 0.0;
+        for (int i = 0; i < 6; ++i)
+            for (int k = 0; k < nc; ++k) {
+                const int a = hia[i], b = hib[i];
+                gh[a * 3 * nc + b * nc + k] = gh[b * 3 * nc + a * nc + k] = hs[i * nc + k]; /* d grad_b / dx_a */
+                hm = fmax(hm, fabs(hs[i * nc + k]));
+            }
+        grad_arg arg = {ctx, &li};
+        const double h = ldexp(1.0, ilogb(rho / 32.0));
+        const fd_result fr = fd_compare(grad_values, &arg, x, h, 3 * nc, gh);
+        const double ratio = fr.err / fd_bound(&fr, 1e-13 * fr.fbig, 1e-10 * hm);
+        worst = fmax(worst, ratio);
+        if (!(ratio <= 1.0))
+            harness_fail(__FILE__, __LINE__, "case %d (%s): |H - D8| %.3g > bound %.3g", it, li.sphere ? "sphere" : "polygon",
+                         fr.err, fd_bound(&fr, 1e-13 * fr.fbig, 1e-10 * hm));
+    }
+    harness_note("worst |H - D8| / derived bound %.2f (12 polygons, 12 spheres, lmax 8)", worst);
+    shl_ctx_destroy(ctx);
 }
 
 /* ---- reference 2: band 0 from the solid angle in long double ---- */
