@@ -70,7 +70,7 @@ typedef struct shl_ctx shl_ctx;
  *  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create(int lmax, shl_ctx **out);
 /** As shl_ctx_create, with the batch kernels of the instruction set named isa
- *  ("scalar", "avx2", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
+ *  ("scalar", "avx2", "avx512", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
  *  isa NULL: SHL_ENULL; not compiled in or not supported by this CPU and OS:
  *  SHL_EDOMAIN ("scalar" always succeeds).  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create_isa(int lmax, const char *isa, shl_ctx **out);
@@ -340,6 +340,39 @@ int shl_sphere_grad(const shl_ctx *ctx, const double x[3], const double center[3
                     double *coeffs, double *grad);
 int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
                       float *coeffs, float *grad);
+
+/* ---- second derivatives (Hessians) -------------------------------------- */
+/**
+ * Coefficients, gradient (layouts of shl_polygon_grad / shl_sphere_grad) and the six
+ * second derivatives hess[i*nc + k] = d^2 coeffs[k] / dx_a dx_b, i = 0..5 for
+ * (a,b) = xx, xy, xz, yy, yz, zz (hess has 6*nc entries), derived analytically:
+ * the polygon's boundary formulation (Wu et al. 2020 gradients) extended one order,
+ * the sphere's cap w_l(cos a) Y_lm(axis) differentiated twice through its lobe
+ * integrals (derivation in README, "Hessians").  Same validation and statuses as
+ * the gradient functions (all pointers required); nothing is written on error.
+ * Polygon: the Hessian grows like 1/distance^2 near an edge (rounding error ~eps times
+ * that growth, as the gradient's); in the polygon's plane coeffs, grad and hess are 0 (not
+ * differentiable there); near the plane the Hessian is taken from the boundary sums (error
+ * ~eps dmin / height of its scale) while the coefficients use shl_polygon's planar rule;
+ * edges seen nearly end-on (x much closer to an edge's line than to the edge) take their
+ * new edge integrals from a Gauss rule on the arc, so no (distance ratio)^2 loss there.
+ * Sphere: analytic outside, growing like (|center - x| - radius)^(-3/2) towards the
+ * surface; inside or on it the coefficients are constant and grad, hess are 0.
+ */
+int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n,
+                     double *coeffs, double *grad, double *hess);
+int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                    double *coeffs, double *grad, double *hess);
+/**
+ * shl_lights_eval with second derivatives: rgb and grad as there (grad required here),
+ *   hess[(c*6 + i)*nc + k] = d^2 rgb[c*nc + k] / dx_a dx_b,  i as in shl_polygon_hess  (18*nc entries).
+ * Each light adds rgb_c times its shl_polygon_hess / shl_sphere_hess values (to
+ * rounding: the set reconstructs its summed lobe integrals once); a one-sided
+ * polygon adds nothing on or behind its plane.  A workspace is allocated per call
+ * (SHL_ENOMEM).
+ */
+int shl_lights_eval_hess(const shl_ctx *ctx, const shl_lights *lights, const double x[3], double *rgb,
+                         double *grad, double *hess);
 
 /* ---- zonal harmonics (ZH) and SH operations ----------------------------- */
 /*
@@ -695,10 +728,12 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
 
 /**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with
- * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
+ * AVX2 and FMA, YMM state enabled by the OS), "avx512" (x86-64 with AVX-512 F,
+ * DQ, VL and BW besides, opmask and ZMM state enabled by the OS) or "neon"
+ * (AArch64); "" for NULL.
  * Chosen at shl_ctx_create: the best one compiled in and supported, unless the
  * environment variable SHLIGHT_ISA names another compiled-in, supported one
- * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.  Or
+ * (scalar | avx2 | avx512 | neon); any other value of SHLIGHT_ISA is ignored.  Or
  * given explicitly to shl_ctx_create_isa.
  */
 const char *shl_ctx_isa(const shl_ctx *ctx);

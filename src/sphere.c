@@ -8,21 +8,8 @@
 #define SHL__ALWAYS_INLINE __attribute__((always_inline)) inline
 #define SHL__NOINLINE __attribute__((noinline))
 
-#define REAL double
-#define SUFFIX(name) name##_d
-#define TAB(name) shl__sh_##name##_d
-#include "sphere_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
-
-#define REAL float
-#define SUFFIX(name) name##_f
-#define TAB(name) shl__sh_##name##_f
-#include "sphere_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
+#define SHL_REAL_IMPL "sphere_impl.h"
+#include "real_instances.h"
 
 /* Every non-zero |v_k| and a in [2^-100, 2^100): every product, square and quotient
  * of the set-up below is a normal double both unscaled and in scaled units, so the

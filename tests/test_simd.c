@@ -401,6 +401,26 @@ SHL_TEST(simd_dispatch)
     harness_note("default %s; %s", best ? best->name : "?", info);
 }
 
+/* The CPU checks of src/dispatch.c against the compiler's own CPU model
+ * (__builtin_cpu_supports: CPUID and, for AVX and AVX-512 state, XGETBV, in
+ * libgcc / compiler-rt): each x86 ISA is supported exactly when every feature
+ * its flags enable is (avx512: F, DQ, VL, BW, with AVX2 and FMA).  So on a CPU
+ * with AVX-512 the SIMD tests cannot silently skip it. */
+SHL_TEST(simd_isa_matches_cpu)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init();
+    const int avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    const int avx512 = avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                       __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+    CHECK((shl__isa_find("avx2") != NULL) == avx2);
+    CHECK((shl__isa_find("avx512") != NULL) == avx512);
+    harness_note("CPU: avx2+fma %s, avx512 f/dq/vl/bw %s", avx2 ? "yes" : "no", avx512 ? "yes" : "no");
+#else
+    harness_note("not x86-64: nothing to compare");
+#endif
+}
+
 SHL_TEST(simd_bad_input)
 {
     shl_ctx *ctx;
