@@ -24,7 +24,7 @@ void SUFFIX(shl__cap_weights)(int lmax, REAL t, REAL s2, REAL c, REAL *w, REAL *
 }
 
 /* lmax <= SHL__SPHERE_SMALL without gradient: shl__cap_weights and shl__sh_eval_w
- * with lmax a compile-time constant L (one instance per L, chosen in shl__sphere_sh)
+ * with lmax a compile-time constant L (one instance per L, chosen in sphere_value_regs)
  * and every loop unrolled, so that each value lives in a register: no calls, loop
  * control or stores but the outputs (at low lmax these, not the arithmetic, were
  * most of the time).  Each value is formed by the same operations in the same order
