@@ -254,7 +254,7 @@ static void monomial(const lighting *L, const double x[3], double *rgb, double *
 
 enum { BLOCK = 64 };
 
-static void eval_block(void *arg, long begin, long end, int worker)
+static void eval_block(void *arg, int worker, long begin, long end)
 {
     eval_job *j = arg;
     const lighting *L = j->L;

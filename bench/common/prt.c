@@ -164,7 +164,7 @@ typedef struct {
     const double *lobe; /* per material: lmax+1 ZH (glossy materials) */
 } shade_job;
 
-static void shade_block(void *arg, long begin, long end, int worker)
+static void shade_block(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const shade_job *j = arg;

@@ -136,7 +136,7 @@ static void global_to_local(const ctx_t *c, long g, int *m, int *t)
     *t = (int)(g - c->first_tri[k]);
 }
 
-static void count_job(void *arg, long begin, long end, int worker)
+static void count_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
@@ -147,7 +147,7 @@ static void count_job(void *arg, long begin, long end, int worker)
     }
 }
 
-static void write_job(void *arg, long begin, long end, int worker)
+static void write_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
@@ -159,7 +159,7 @@ static void write_job(void *arg, long begin, long end, int worker)
 }
 
 /* Rasterize the records binned to one tile, in record order (deterministic ties). */
-static void tile_job(void *arg, long begin, long end, int worker)
+static void tile_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
@@ -292,7 +292,7 @@ typedef struct {
     float *rgb;
 } resolve_t;
 
-static void resolve_job(void *arg, long begin, long end, int worker)
+static void resolve_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const resolve_t *r = arg;
