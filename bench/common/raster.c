@@ -16,7 +16,7 @@ int framebuf_init(framebuf *fb, int w, int h)
     fb->tri = malloc(sizeof(int) * n);
     fb->bary = malloc(sizeof(float) * 3 * n);
     fb->back = malloc(n);
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 4; ++i) {
         fb->work[i] = NULL;
         fb->work_len[i] = 0;
     }
@@ -32,7 +32,7 @@ void framebuf_free(framebuf *fb)
     free(fb->tri);
     free(fb->bary);
     free(fb->back);
-    for (int i = 0; i < 3; ++i) free(fb->work[i]);
+    for (int i = 0; i < 4; ++i) free(fb->work[i]);
     memset(fb, 0, sizeof *fb);
 }
 
@@ -63,6 +63,7 @@ typedef struct {
     rtri **chunk_recs; /* per chunk of CHUNK global triangles: its records, in triangle order */
     long *chunk_count; /* their number, then the prefix sum */
     rtri *scratch;     /* per worker: 2 CHUNK records */
+    pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     int failed;        /* a chunk could not store its records */
     rtri *recs;
     long nrecs;
@@ -102,21 +103,20 @@ static void project_job(void *arg, int worker, long begin, long end)
 }
 
 /* Clip the triangle to forward >= znear, project, and emit up to 2 records; returns the count.
- * A triangle wholly in front of the near plane (the common case) uses its vertices'
- * projections of project_job, the same values the clipping path computes. */
-static int setup_tri(const ctx_t *c, int m, int t, rtri *out)
+ * pv: its corners' projections (project_job); a triangle wholly in front of the near plane
+ * (the common case) uses them, the same values the clipping path computes. */
+static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
 {
     const raster_mesh *rm = &c->meshes[m];
     const int *tv = rm->tri + 3 * (size_t)t;
-    const pvert *pv = c->pv + c->first_vert[m];
     double sx[4], sy[4], z[4];
     float b[4][3];
     int n = 0;
-    if (pv[tv[0]].z >= c->znear && pv[tv[1]].z >= c->znear && pv[tv[2]].z >= c->znear) {
+    if (pv[0].z >= c->znear && pv[1].z >= c->znear && pv[2].z >= c->znear) {
         for (int k = 0; k < 3; ++k) {
-            sx[k] = pv[tv[k]].sx;
-            sy[k] = pv[tv[k]].sy;
-            z[k] = pv[tv[k]].z;
+            sx[k] = pv[k].sx;
+            sy[k] = pv[k].sy;
+            z[k] = pv[k].z;
             b[k][0] = b[k][1] = b[k][2] = 0.0f;
             b[k][k] = 1.0f;
         }
@@ -202,12 +202,23 @@ static void setup_job(void *arg, int worker, long begin, long end)
     ctx_t *c = arg;
     const long ntri = c->first_tri[c->nmeshes];
     rtri *buf = c->scratch + 2 * CHUNK * (size_t)worker;
+    pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
     for (long ch = begin; ch < end; ++ch) {
+        const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
         long n = 0;
-        for (long g = ch * CHUNK; g < ntri && g < (ch + 1) * CHUNK; ++g) {
+        /* gather the corners first: a loop without data-dependent branches keeps many of
+         * these scattered loads in flight */
+        for (long g = g0; g < g1; ++g) {
             int m, t;
             global_to_local(c, g, &m, &t);
-            n += setup_tri(c, m, t, buf + n);
+            const int *tv = c->meshes[m].tri + 3 * (size_t)t;
+            const pvert *pv = c->pv + c->first_vert[m];
+            for (int k = 0; k < 3; ++k) corner[3 * (g - g0) + k] = pv[tv[k]];
+        }
+        for (long g = g0; g < g1; ++g) {
+            int m, t;
+            global_to_local(c, g, &m, &t);
+            n += setup_tri(c, m, t, corner + 3 * (g - g0), buf + n);
         }
         c->chunk_count[ch] = n;
         if (n && !(c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) c->failed = 1;
@@ -313,7 +324,8 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
     c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
     c.scratch = work(fb, 1, sizeof(rtri) * 2 * CHUNK * (size_t)nw);
-    if (!c.pv || !c.chunk_recs || !c.chunk_count || !c.scratch) goto done;
+    c.corners = work(fb, 3, sizeof(pvert) * 3 * CHUNK * (size_t)nw);
+    if (!c.pv || !c.chunk_recs || !c.chunk_count || !c.scratch || !c.corners) goto done;
     par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
     par_for(nchunks, 1, nw, setup_job, &c);
     if (c.failed) goto done;
