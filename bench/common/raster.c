@@ -64,7 +64,6 @@ typedef struct {
     long *chunk_count; /* their number, then the prefix sum */
     rtri *scratch;     /* per worker: 2 CHUNK records */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
-    int failed;        /* a chunk could not store its records */
     rtri *recs;
     long nrecs;
     int *tile_first, *tile_list, tiles_x, tiles_y;
@@ -220,9 +219,8 @@ static void setup_job(void *arg, int worker, long begin, long end)
             global_to_local(c, g, &m, &t);
             n += setup_tri(c, m, t, corner + 3 * (g - g0), buf + n);
         }
-        c->chunk_count[ch] = n;
-        if (n && !(c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) c->failed = 1;
-        else if (n) memcpy(c->chunk_recs[ch], buf, sizeof(rtri) * (size_t)n);
+        c->chunk_count[ch] = n; /* records but no copy: out of memory, seen by raster_draw */
+        if (n && (c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) memcpy(c->chunk_recs[ch], buf, sizeof(rtri) * (size_t)n);
     }
 }
 
@@ -328,10 +326,10 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     if (!c.pv || !c.chunk_recs || !c.chunk_count || !c.scratch || !c.corners) goto done;
     par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
     par_for(nchunks, 1, nw, setup_job, &c);
-    if (c.failed) goto done;
     long sum = 0;
     for (long ch = 0; ch < nchunks; ++ch) {
         const long k = c.chunk_count[ch];
+        if (k && !c.chunk_recs[ch]) goto done;
         c.chunk_count[ch] = sum;
         sum += k;
     }
