@@ -112,7 +112,7 @@ static void level_init(const shl_agrid *g, int l, shl__alevel *L)
 static size_t level_bytes(const shl__alevel *L, size_t node_len)
 {
     return (L->nodes.cap + L->cells.cap) * (sizeof(uint64_t) + sizeof(uint32_t)) +
-           L->node_cap * (sizeof(uint64_t) + node_len * sizeof(float) + 1) +
+           L->node_cap * (sizeof(uint64_t) + 1) + L->data_cap * node_len * sizeof(float) +
            L->cell_cap * (sizeof(shl__acell) + sizeof(uint64_t));
 }
 
@@ -142,7 +142,7 @@ static int add_node(shl__alevel *L, const int i[3], size_t node_len)
         L->node_key = k;
         L->data = d;
         L->flag = f;
-        L->node_cap = cap;
+        L->node_cap = L->data_cap = cap;
     }
     if (hreserve(&L->nodes)) return SHL_ENOMEM;
     const uint64_t k = key3(i);
@@ -448,6 +448,17 @@ static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint
     return SHL_OK;
 }
 
+/* The node data of a filled level cut to its node count (kept as is if that allocation fails). */
+static void trim_data(shl__alevel *L, size_t node_len)
+{
+    float *d = shl__malloc(L->nnodes * node_len * sizeof *d);
+    if (!d) return;
+    memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
+    shl__free(L->data);
+    L->data = d;
+    L->data_cap = L->nnodes;
+}
+
 static void free_levels(shl__alevel *lev, int n)
 {
     for (int l = 0; l < n; ++l) level_free(lev + l);
@@ -522,7 +533,10 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         resolve_cells(lev + l + 1, 0);
         status = eval_nodes(&job, l + 1, 0, nthreads);
     }
-    if (!status) fill_stats(g, lev, *nl, st);
+    if (!status) {
+        for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
+        fill_stats(g, lev, *nl, st);
+    }
     return status;
 }
 
@@ -593,6 +607,7 @@ int shl_agrid_create(const shl_ctx *ctx, const double lo[3], const double hi[3],
         return SHL_ENOMEM;
     }
     memset(g->lev[0].data, 0, g->lev[0].nnodes * g->node_len * sizeof(float));
+    trim_data(g->lev, g->node_len);
     g->nlevels = 1;
     fill_stats(g, g->lev, 1, &g->stats);
     *out = g;

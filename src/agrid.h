@@ -33,7 +33,7 @@ typedef struct {
     uint64_t *node_key;    /* per node: its lattice key (position) */
     float *data;           /* per node: node_len floats, layout of grid.h */
     unsigned char *flag;   /* per node: flagged (in a refined cell of the level above) */
-    size_t nnodes, node_cap;
+    size_t nnodes, node_cap, data_cap; /* data_cap: nodes data holds (node_cap, or nnodes after fill) */
     shl__acell *cell;
     uint64_t *cell_key;
     size_t ncells, cell_cap;

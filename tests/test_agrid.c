@@ -380,3 +380,46 @@ SHL_TEST(agrid_light_inside_refined)
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
 }
+
+/* SHL_AGRID_MEAN on the light inside the box: the criterion e 8^-l > tol stops
+ * by itself at the discontinuity (e stays ~|L| there, the threshold grows 8x per
+ * level), so with a large budget the fill ends with every estimated cell within it
+ * (unresolved == 0, budget not hit).  Mean error over NP random points in the box:
+ * each leaf cell c contributes about (its mean error) vol_c / V <= 3.2 e_c vol_c / V
+ * (the sample-to-cell factor of agrid_smooth_within_tolerance) <= 3.2 tol / N0
+ * (N0 = 27 coarse cells, vol_0 = V / N0), so mean <= 3.2 tol (leaf cells) / N0 <=
+ * 3.2 tol cells / N0, a loose bound; the discontinuity is inside cells whose
+ * estimate met the criterion, which is all the bound rests on. */
+SHL_TEST(agrid_mean_criterion_light_inside)
+{
+    shl_ctx *ctx = ctx_new();
+    shl_lights *l = inside_light();
+    const int r4[3] = {4, 4, 4};
+    enum { NP = 3000 };
+    rng_t r = {13};
+    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
+    for (int i = 0; i < 3 * NP; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
+    double lmax_norm = 0.0;
+    const double zero[NV] = {0};
+    for (int p = 0; p < NP; ++p) lmax_norm = fmax(lmax_norm, err_norm(ref + (size_t)p * NV, zero));
+    const double tol = 1e-3 * lmax_norm;
+    shl_agrid *g;
+    shl_agrid_stats st;
+    CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, tol, 2000000, &g) == SHL_OK);
+    CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
+    CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+    CHECK(st.unresolved == 0 && st.budget_hit == 0 && st.max_estimate <= tol);
+    CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
+    double mean = 0.0;
+    for (int p = 0; p < NP; ++p) mean += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
+    CHECK(mean <= 3.2 * tol * (double)st.cells / 27.0);
+    harness_note("tol 1e-3 max|L|: %ld nodes, %d levels, %ld cells; mean err %.2f tol (bound %.0f tol)", st.nodes, st.levels,
+                 st.cells, mean / tol, 3.2 * (double)st.cells / 27.0);
+    shl_agrid_destroy(g);
+    free(pts);
+    free(a);
+    free(ref);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
