@@ -6,6 +6,7 @@
 #include "internal.h" /* shl__alloc_fail_after, shl__thread_fail_after */
 #include "testutil.h"
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -82,7 +83,9 @@ SHL_TEST(agrid_bad_input)
     BAD(shl_agrid_create(ctx, box_lo, box_hi, rbig, SHL_AGRID_MAX, 1e-3, 100000000, &g), SHL_EDOMAIN);
     BAD(shl_agrid_create(ctx, box_hi, box_lo, r4, SHL_AGRID_MAX, 1e-3, 1000, &g), SHL_EDOMAIN);
     BAD(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, 1e-3, 63, &g), SHL_EDOMAIN);       /* < 4^3 */
-    BAD(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, 1e-3, 1L << 31, &g), SHL_EDOMAIN); /* > 2^31 - 1 */
+#if LONG_MAX > 0x7FFFFFFFL
+    BAD(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, 1e-3, 0x80000000L, &g), SHL_EDOMAIN); /* > 2^31 - 1 */
+#endif
     BAD(shl_agrid_create(ctx, far, far2, r4, SHL_AGRID_MAX, 1e-3, 1000, &g), SHL_EDOMAIN);          /* beyond the float fill */
 #undef BAD
     /* allocation failures: every one SHL_ENOMEM with *out = NULL, until the call succeeds */
