@@ -333,8 +333,9 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * an image's mean absolute error weighs it; near a discontinuity, such as a
  * two-sided light in the box, e stays ~|L| at every level and MAX refines to the
  * budget or the finest level, MEAN to about log_8(|L| / tol) levels).  Cells whose
- * criterion value exceeds tol are refined, largest first,
- * while the total node count stays <= max_nodes (ring included, below).  A level
+ * criterion value exceeds tol are refined, largest first, while the total node
+ * count stays <= max_nodes (ring included, below); the refinement is breadth-first
+ * (level by level), so a tight budget goes to the coarser levels first.  A level
  * from which no refinement can follow (the budget was hit, or the finest level
  * allowed) is not estimated.
  * An a-posteriori estimate is a measurement at two points per cell, not a bound:
