@@ -10,7 +10,9 @@
  * radiance function over the sphere (Parseval); reported as mean e / mean |L| (rel.
  * MAE) over both sets.  A proxy for the image error of bench_tables (no rendering).
  * Ratios: against uniform 32^3, the adaptive run with the fewest nodes and the one with
- * the least fill time among those at an error <= uniform 32^3's; all from this run.
+ * the least fill time among those at an error <= uniform 32^3's (rel. MAE; on wu-monkey
+ * also the largest error: on wu-fig12 that is the jump across the light, unresolved by any
+ * grid); all from this run.
  * Usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey] [-d DIR]; writes DIR/bench_agrid.csv
  * (default build/bench): scene,kind,res,tol,nodes,levels,fill_s,rel_mae,rel_max,bytes. */
 #include "scene.h"
@@ -194,7 +196,9 @@ static result adaptive(const shl_ctx *ctx, const shl_lights *l, probe *p, int re
     return r;
 }
 
-static void run_scene(const char *file, const char *name, int quick, int nthreads)
+/* light_in_box: the max error is then set by the field's jump across the light (no grid
+ * resolves it), so only the mean is compared. */
+static void run_scene(const char *file, const char *name, int light_in_box, int quick, int nthreads)
 {
     printf("\n== %s (%s), lmax %d, box [-2.5,2.5]x[0,1.9]x[-2.5,2.5], %d threads ==\n", name, file, LMAX, nthreads);
     shl_ctx *ctx;
@@ -235,7 +239,7 @@ static void run_scene(const char *file, const char *name, int quick, int nthread
                     if (r.fill < best_time[m].fill) best_time[m] = r;
                 }
         }
-    for (int m = 0; m < 2; ++m) {
+    for (int m = 0; m < 2 - light_in_box; ++m) {
         const char *metric = m ? "rel. max" : "rel. MAE";
         const double target = m ? u32.mx : u32.mae;
         if (best_nodes[m].nodes < 0) {
@@ -281,8 +285,8 @@ int main(int argc, char **argv)
     snprintf(path, sizeof path, "%s/bench_agrid.csv", dir);
     csv = fopen(path, "w");
     if (csv) fprintf(csv, "scene,kind,res,tol,nodes,levels,fill_s,rel_mae,rel_max,bytes\n");
-    if (!only || !strcmp(only, "wu-fig12")) run_scene("wu-fig12.scene", "wu-fig12", quick, nthreads);
-    if (!only || !strcmp(only, "wu-monkey")) run_scene("wu-monkey.scene", "wu-monkey", quick, nthreads);
+    if (!only || !strcmp(only, "wu-fig12")) run_scene("wu-fig12.scene", "wu-fig12", 1, quick, nthreads);
+    if (!only || !strcmp(only, "wu-monkey")) run_scene("wu-monkey.scene", "wu-monkey", 0, quick, nthreads);
     if (csv) {
         fclose(csv);
         printf("\nCSV: %s\n", path);
