@@ -304,13 +304,12 @@ typedef struct {
     shl_ctx ctx;
     shl__alevel *lev;
     int l;              /* the level worked on */
-    size_t first;       /* eval_nodes: first node to evaluate */
     double *est;        /* estimate_cells: per cell of level l */
     char *ws;
     size_t stride, batch_bytes;
 } fill_job;
 
-/* Nodes first.. of level l, blocks of BLOCK in node order, through the float batch
+/* The nodes of level l, blocks of BLOCK in node order, through the float batch
  * with gradients (Wu 2020 Alg. 1 l. 5-7), straight into the node data. */
 static void nodes_range(void *arg, int worker, long begin, long end)
 {
@@ -320,7 +319,7 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     void *buf = job->batch_bytes ? job->ws + job->stride * (size_t)worker : NULL;
     float pts[3 * BLOCK];
     for (long b = begin; b < end; ++b) {
-        const size_t n0 = job->first + (size_t)b * BLOCK, left = L->nnodes - n0;
+        const size_t n0 = (size_t)b * BLOCK, left = L->nnodes - n0;
         const int m = left < BLOCK ? (int)left : BLOCK;
         for (int j = 0; j < m; ++j) {
             int i[3];
@@ -388,11 +387,10 @@ static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size
     return st;
 }
 
-static int eval_nodes(fill_job *job, int l, size_t first, int nthreads)
+static int eval_nodes(fill_job *job, int l, int nthreads)
 {
     job->l = l;
-    job->first = first;
-    const long n = (long)((job->lev[l].nnodes - first + BLOCK - 1) / BLOCK);
+    const long n = (long)((job->lev[l].nnodes + BLOCK - 1) / BLOCK);
     return run(job, n, nthreads, nodes_range, 0);
 }
 
@@ -481,11 +479,11 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
 static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl__alevel *lev, int *nl,
                  shl_agrid_stats *st)
 {
-    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, 0, NULL, NULL, 0, 0};
+    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, NULL, NULL, 0, 0};
     job.batch_bytes = shl__lights_batch_f_bytes(&job.ctx, lights, 1); /* >= the values-only size */
     *nl = 1;
     int status = build_level0(g, lev);
-    if (!status) status = eval_nodes(&job, 0, 0, nthreads);
+    if (!status) status = eval_nodes(&job, 0, nthreads);
     long total = (long)lev[0].nnodes;
     for (int l = 0; !status; ++l) {
         shl__alevel *L = lev + l;
@@ -531,7 +529,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         shl__free(flagged);
         if (status || *nl == l + 1) break;
         resolve_cells(lev + l + 1, 0);
-        status = eval_nodes(&job, l + 1, 0, nthreads);
+        status = eval_nodes(&job, l + 1, nthreads);
     }
     if (!status) {
         for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
