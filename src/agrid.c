@@ -259,11 +259,12 @@ static void composite(const shl_agrid *g, const shl__alevel *lev, int nl, const 
             s.hw[a][3] = -uu * uu * v * L->h[a];
         }
         for (int j = 0; j < 8; ++j) s.ofs[j] = (size_t)cell[l]->node[j] * g->node_len;
+        shl__interp_ahead no_ahead = {.nrange = 0}; /* no look-ahead: levels are visited point by point */
         if (first && coef == 1.0) {
-            g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, out);
+            g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, &no_ahead, out);
             return;
         }
-        g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, tmp);
+        g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, &no_ahead, tmp);
         for (size_t i = 0; i < nv; ++i) out[i] = first ? coef * tmp[i] : out[i] + coef * tmp[i];
         first = 0;
     }
