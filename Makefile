@@ -116,10 +116,15 @@ $(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h) $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Itests -c $< -o $@
 
-# The benchmark harness (bench/common) is linked into the test runner too:
-# tests/test_render.c renders a tiny scene with it.
-HARNESS_OBJ := $(BENCH_COMMON)
-$(BUILD)/tests/run_tests: $(HARNESS_OBJ)
+# The benchmark harness (bench/common) is built once, into the static archive $(BENCH_LIB), which
+# the bench programs and the test runner link (tests/test_render.c renders a tiny scene with it).
+# Its parallel loop is the library's (src/parallel.h): it links the library statically, with
+# libshlight.a or the test build's objects.
+BENCH_LIB := $(BUILD)/libshlbench.a
+$(BENCH_LIB): $(BENCH_COMMON)
+	@rm -f $@
+	ar rcs $@ $^
+$(BUILD)/tests/run_tests: $(BENCH_LIB)
 $(BUILD)/tests/test_render.o: CFLAGS_ALL += -Ibench/common
 $(BUILD)/tests/test_render.o: $(wildcard bench/common/*.h)
 
@@ -155,9 +160,9 @@ $(BUILD)/bench/common/%.o: bench/common/%.c $(wildcard bench/common/*.h include/
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Ibench/common -DSHL_BUILD_FLAGS="\"$(CSTD) $(OPT)\"" -c $< -o $@
 
-$(BUILD)/bench/%: bench/%.c $(BENCH_COMMON) $(STATIC) $(wildcard bench/common/*.h)
+$(BUILD)/bench/%: bench/%.c $(BENCH_LIB) $(STATIC) $(wildcard bench/common/*.h)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_ALL) -Ibench/common $(LDFLAGS) -o $@ $< $(BENCH_COMMON) $(STATIC) $(LDLIBS)
+	$(CC) $(CFLAGS_ALL) -Ibench/common $(LDFLAGS) -o $@ $< $(BENCH_LIB) $(STATIC) $(LDLIBS)
 
 bench: $(BENCH_BIN)
 

@@ -270,7 +270,7 @@ typedef struct {
     double *out;
 } nodes_job;
 
-static void nodes_block(void *arg, long begin, long end, int worker)
+static void nodes_block(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const nodes_job *j = arg;

@@ -21,10 +21,15 @@
  *  - the rendered image does not depend on the thread count;
  *  - the VPL and VSL baselines of HVL Table 2 (bench/common/hvlpass.c): VSL's cone estimate
  *    against a midpoint quadrature of the same cone integral, and VSL's small-sphere limit
- *    against VPL (error analyses at the tests). */
+ *    against VPL (error analyses at the tests);
+ *  - the harness's parallel loop (bench/common/parfor.c on the library's shl__parallel_for)
+ *    visits every item once in chunks of at most `grain`, also when a thread cannot be
+ *    created (then on the calling thread, returning -1). */
 #include "harness.h"
+#include "internal.h" /* shl__thread_fail_after: the test hook of the SHL_ALLOC_HOOKS build */
 #include "image.h"
 #include "lambert.h"
+#include "parfor.h"
 #include "prt.h"
 #include "vec3.h"
 #include "testutil.h"
@@ -343,4 +348,36 @@ SHL_TEST(render_vsl_point_limit)
     const double vpl = vpl_radiance(&h, x, n), vsl = vsl_radiance(&h, x, n, 3, 7u);
     harness_note("VPL %.9e, VSL (r/d 1e-4, 9 samples) %.9e, rel. diff %.2e", vpl, vsl, fabs(vsl / vpl - 1));
     CHECK(vpl > 0 && fabs(vsl / vpl - 1) <= 1e-3);
+}
+
+typedef struct {
+    long grain;
+    int nthreads;
+    unsigned char *seen;
+    unsigned char *chunk_bad; /* per chunk: longer than grain, misaligned, or a worker index out of range */
+} parfor_probe;
+
+static void parfor_visit(void *arg, int worker, long begin, long end)
+{
+    parfor_probe *q = arg;
+    for (long i = begin; i < end; ++i) ++q->seen[i];
+    q->chunk_bad[begin / q->grain] = end - begin > q->grain || begin % q->grain || worker < 0 || worker >= q->nthreads;
+}
+
+SHL_TEST(render_parfor_library_loop)
+{
+    enum { N = 1000, GRAIN = 7 };
+    unsigned char seen[N], chunk_bad[N / GRAIN + 1];
+    for (int fail = -1; fail <= 0; ++fail)
+        for (int nt = 1; nt <= 3; ++nt) {
+            parfor_probe q = {GRAIN, nt, seen, chunk_bad};
+            memset(seen, 0, sizeof seen);
+            memset(chunk_bad, 0, sizeof chunk_bad);
+            shl__thread_fail_after = fail; /* 0: the first thread creation fails */
+            const int st = par_for(N, GRAIN, nt, parfor_visit, &q);
+            shl__thread_fail_after = -1;
+            CHECK(st == (fail == 0 && nt > 1 ? -1 : 0));
+            for (int i = 0; i < N; ++i) CHECK(seen[i] == 1);
+            for (int c = 0; c < N / GRAIN + 1; ++c) CHECK(!chunk_bad[c]);
+        }
 }

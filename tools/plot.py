@@ -13,6 +13,8 @@ Writes SVG and PNG files:
   wu2020_fig8               SH lighting time vs number of lights
   wu2020_fig9               grid resolution vs time and image error
   hvl2022_table1            HVL gathering time vs HVL count, per band count
+  agrid_<scene>             adaptive vs uniform grids: error vs nodes and vs fill time
+                            (bench_agrid.csv: build/bench/bench_agrid -d <tables dir>)
   wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
   annen2004_fig8            error of one extrapolated sample vs distance
   wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12, hvl2022_table2
@@ -332,6 +334,28 @@ def panel_figure(name, tables, out):
     save(fig, out, name, exts=("png",))  # raster panels: an SVG would only embed them
 
 
+def agrid(rows, out):
+    """bench/bench_agrid.c: rel. MAE vs nodes and vs fill time, uniform and each adaptive kind, per scene."""
+    kinds = OrderedDict([("uniform", ("o", "tab:blue")), ("max", ("s", "tab:red")), ("mean", ("^", "tab:green")),
+                         ("max-budg", ("v", "tab:orange"))])
+    for scene in OrderedDict((r["scene"], 1) for r in rows):
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+        for ax, xkey, xlabel in ((axes[0], "nodes", "nodes"), (axes[1], "fill_s", "fill time (s)")):
+            for kind, (marker, color) in kinds.items():
+                pts = sorted((float(r[xkey]), float(r["rel_mae"])) for r in rows if r["scene"] == scene and r["kind"] == kind)
+                if pts:
+                    ax.plot(*zip(*pts), marker=marker, color=color, linestyle="-" if kind == "uniform" else "none",
+                            label=kind)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel("rel. MAE of the coefficients")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=8)
+        fig.suptitle(f"{scene}: adaptive vs uniform grids (lmax 8, Hermite)")
+        save(fig, out, f"agrid_{scene}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tables", default="build/bench-tables/tables", help="directory of the CSV files")
@@ -339,7 +363,7 @@ def main():
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     for name, fn in (("accuracy_vs_time.csv", accuracy_vs_time), ("wu2020_fig8.csv", wu_fig8),
-                     ("wu2020_fig9.csv", wu_fig9), ("hvl2022_table1.csv", hvl_table1)):
+                     ("wu2020_fig9.csv", wu_fig9), ("hvl2022_table1.csv", hvl_table1), ("bench_agrid.csv", agrid)):
         rows = read_csv(os.path.join(args.tables, name))
         if rows:
             fn(rows, args.out)

@@ -158,7 +158,7 @@ typedef struct {
     int failed[256];
 } gather_job;
 
-static void gather_block(void *arg, long begin, long end, int worker)
+static void gather_block(void *arg, int worker, long begin, long end)
 {
     gather_job *j = arg;
     const mesh *g = &j->s->geom;
@@ -239,7 +239,7 @@ typedef struct {
     par_progress *prog;
 } vl_job;
 
-static void vl_block(void *arg, long begin, long end, int worker)
+static void vl_block(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     vl_job *j = arg;

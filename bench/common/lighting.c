@@ -150,12 +150,16 @@ void lighting_free(lighting *L)
     free(L);
 }
 
+enum { BLOCK = 64 };
+
 typedef struct {
     const lighting *L;
     const double *pts;
     float *coef;
     par_progress *prog;
-    int failed[256]; /* per worker */
+    double *out, *acc; /* per worker: 3 nc BLOCK outputs, 3 SHL__ZH_BLOCK accumulators */
+    float *pf;         /* per worker: 3 BLOCK float positions */
+    int failed[SHL_MAX_THREADS]; /* per worker */
 } eval_job;
 
 static uint64_t mix64(uint64_t x)
@@ -296,17 +300,14 @@ static void monomial(const lighting *L, const double x[3], double *rgb, double *
     for (int ch = 0; ch < 3; ++ch) shl__zh_to_sh(lmax, acc + ch * SHL__ZH_BLOCK, rgb + ch * nc);
 }
 
-enum { BLOCK = 64 };
-
-static void eval_block(void *arg, long begin, long end, int worker)
+static void eval_block(void *arg, int worker, long begin, long end)
 {
     eval_job *j = arg;
     const lighting *L = j->L;
     const int nc = L->nc, nb = (int)(end - begin);
     const double *pts = j->pts + 3 * begin;
-    double *out = malloc(sizeof(double) * 3 * (size_t)nc * BLOCK), *acc = malloc(sizeof(double) * 3 * SHL__ZH_BLOCK);
-    float *pf = malloc(sizeof(float) * 3 * BLOCK);
-    if (!out || !acc || !pf) goto fail;
+    double *out = j->out + 3 * (size_t)nc * BLOCK * (size_t)worker, *acc = j->acc + 3 * SHL__ZH_BLOCK * (size_t)worker;
+    float *pf = j->pf + 3 * BLOCK * (size_t)worker;
     switch (L->m.kind) {
     case LM_ANALYTIC:
         if (shl_lights_eval_batch(L->ctx, L->set, nb, pts, out, NULL) != SHL_OK) goto fail;
@@ -363,25 +364,28 @@ static void eval_block(void *arg, long begin, long end, int worker)
     if (L->m.kind != LM_ANALYTIC_F)
         for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) j->coef[3 * (size_t)nc * (size_t)begin + k] = (float)out[k];
     par_progress_add(j->prog, nb);
-    free(out);
-    free(acc);
-    free(pf);
     return;
 fail:
     j->failed[worker] = 1;
-    free(out);
-    free(acc);
-    free(pf);
 }
 
 int lighting_eval(const lighting *L, long n, const double *pts, float *coef, int nthreads)
 {
     char name[128] = "lighting: ";
     lighting_name(&L->m, name + strlen(name), sizeof name - strlen(name));
-    eval_job j = {L, pts, coef, par_progress_begin(name, n), {0}};
-    par_for(n, BLOCK, nthreads, eval_block, &j);
-    par_progress_end(j.prog);
-    for (int w = 0; w < 256; ++w)
-        if (j.failed[w]) return -1;
-    return 0;
+    const int nw = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
+    eval_job j = {L, pts, coef, NULL, malloc(sizeof(double) * 3 * (size_t)L->nc * BLOCK * (size_t)nw),
+                  malloc(sizeof(double) * 3 * SHL__ZH_BLOCK * (size_t)nw), malloc(sizeof(float) * 3 * BLOCK * (size_t)nw), {0}};
+    int st = j.out && j.acc && j.pf ? 0 : -1;
+    if (!st) {
+        j.prog = par_progress_begin(name, n);
+        par_for(n, BLOCK, nw, eval_block, &j);
+        par_progress_end(j.prog);
+        for (int w = 0; w < nw; ++w)
+            if (j.failed[w]) st = -1;
+    }
+    free(j.out);
+    free(j.acc);
+    free(j.pf);
+    return st;
 }
