@@ -191,15 +191,16 @@ SHL_TEST(simd_lights_hard_cases)
         CHECK(same);
         for (int p = 3; p < NP; ++p) /* inside or on the sphere, in front of the square */
             for (int c = 0; c < 3; ++c) {
-                static double sqc[NCMAX];
+                static double sqc[NCMAX], sqg[3 * NCMAX];
                 const double x[3] = {pts[3 * p], pts[3 * p + 1], pts[3 * p + 2]};
-                double omega;
-                CHECK(shl_polygon(ctx, x, sq, 4, sqc) == SHL_OK);
+                double omega, gmax = 0.0, tc[9], tg[9];
+                CHECK(shl_polygon_grad(ctx, x, sq, 4, sqc, sqg) == SHL_OK);
                 CHECK(shl_polygon_solid_angle(x, sq, 4, &omega) == SHL_OK);
+                for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(sqg[k]));
+                float_poly_tol(8, x, sq, 4, omega, gmax, 1, tc, tg);
                 /* L00 = rgb (sqrt(4 pi) + square's L00): float rounding of both terms and the
-                 * square's batch tolerance (2e-5 + 4e-5/theta) |L00| (test_simd.c) */
-                const double tol = fabs(rgb[c]) * (4.0 * FLT_EPSILON * sqrt(4.0 * M_PI) +
-                                                    (2e-5 + 4e-5 / sqrt(omega)) * fabs(sqc[0]));
+                 * square's derived band-0 batch tolerance (float_tol.h) */
+                const double tol = fabs(rgb[c]) * (4.0 * FLT_EPSILON * sqrt(4.0 * M_PI) + tc[0]);
                 CHECK_NEAR(out[3 * nc * p + c * nc], rgb[c] * (sqrt(4.0 * M_PI) + sqc[0]), tol);
             }
         check_set(ctx, &s, pts, NP, "one-sided square and sphere");
