@@ -17,6 +17,9 @@
  *    the part vectorizing across coefficients does not touch; 2 threads against 1;
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
  * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
+#if defined(__linux__) && !defined(_DEFAULT_SOURCE)
+#define _DEFAULT_SOURCE /* madvise, MADV_HUGEPAGE: the huge-page read bandwidth (informational) */
+#endif
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
@@ -25,6 +28,9 @@
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 enum { CHUNK = 128, NPTS = 1 << 16, MAX_ROUNDS = 11 };
 
@@ -67,6 +73,36 @@ static void *xmalloc(size_t n)
         exit(1);
     }
     return p;
+}
+
+/* n bytes, 2 MiB-aligned and advised as huge pages where the kernel has the advice (as the
+ * library's grid nodes of >= 4 MiB, src/alloc.c); *advised: 1 if the advice was taken. */
+static void *huge_malloc(size_t n, int *advised)
+{
+    const size_t page = (size_t)2 << 20, padded = (n + page - 1) / page * page;
+    void *p = aligned_alloc(page, padded);
+    if (!p) {
+        fprintf(stderr, "bench_interp: out of memory (%zu bytes)\n", padded);
+        exit(1);
+    }
+    *advised = 0;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    *advised = madvise(p, padded, MADV_HUGEPAGE) == 0;
+#endif
+    return p;
+}
+
+/* This process's anonymous memory in transparent huge pages, MB (Linux; -1 elsewhere). */
+static double anon_huge_mb(void)
+{
+    FILE *f = fopen("/proc/self/smaps_rollup", "r");
+    if (!f) return -1.0;
+    char line[256];
+    double kb = -1.0;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "AnonHugePages: %lf kB", &kb) == 1) break;
+    fclose(f);
+    return kb < 0 ? -1.0 : kb / 1024.0;
 }
 
 /* ---- memory bandwidth of this core: read (sum) and triad a = b + s c ---- */
@@ -288,15 +324,24 @@ int main(int argc, char **argv)
     int l2_node_bytes;
     shl_grid_bytes_per_node(8, SHL_GRID_FLOAT, &l2_node_bytes);
     const size_t l2_doubles = (size_t)64 * l2_node_bytes / sizeof(double) & ~(size_t)7;
-    double rbw[5], tbw[5], l2bw[5];
+    /* The reference is the read bandwidth of ordinary memory (malloc: 4 KiB pages unless the
+     * kernel's THP mode is "always"), what a streaming read gets without any help; the same
+     * read from an array advised as huge pages, like the library's large grids, is shown too. */
+    int hp_advised;
+    double *bw_h = huge_malloc(sizeof(double) * bw_doubles, &hp_advised);
+    for (size_t i = 0; i < bw_doubles; ++i) bw_h[i] = 1.0 / (1.0 + (double)(i & 1023));
+    double rbw[5], tbw[5], l2bw[5], hbw[5];
     bench_progress("memory bandwidth, 5 rounds (step 2/5)...");
     for (int r = 0; r < 5; ++r) {
         rbw[r] = read_bw(bw_a, bw_doubles, 1);
+        hbw[r] = read_bw(bw_h, bw_doubles, 1);
         tbw[r] = triad_bw(bw_a, bw_b, bw_c, bw_doubles / 4);
         read_bw(bw_b, l2_doubles, 10); /* warm */
         l2bw[r] = read_bw(bw_b, l2_doubles, 2000);
     }
     const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5), l2_peak = bench_median(l2bw, 5);
+    const double huge_read = bench_median(hbw, 5), huge_mb = anon_huge_mb();
+    free(bw_h);
     free(bw_a); /* before the grids: the peak memory is then two grids, not the arrays as well */
     free(bw_b);
     free(bw_c);
@@ -306,15 +351,19 @@ int main(int argc, char **argv)
     printf("Memory bandwidth, one core (median of 5): read (sum of %.0f MB) %.1f GB/s, triad (3 x %.0f MB, 24 B/element) %.1f GB/s;\n"
            "L2 read (sum of %.0f KB, the L2 grid's size at lmax 8, 2000 times) %.1f GB/s\n",
            mb, read_peak * 1e-9, mb / 4, triad_peak * 1e-9, l2_doubles * sizeof(double) / 1024.0, l2_peak * 1e-9);
+    printf("Read bandwidth is ordinary memory's (malloc).  Not the reference: the same read from a 2 MiB-aligned array\n"
+           "advised as huge pages (%s; %.0f MB of this process in huge pages then): %.1f GB/s\n",
+           hp_advised ? "madvise MADV_HUGEPAGE taken" : "no huge-page advice here", huge_mb, huge_read * 1e-9);
     if (csv) {
         fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw,"
                      "ns_no_lookahead,of_read_bw_no_lookahead\n");
         fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f,,\n", read_peak * 1e-9, triad_peak * 1e-9);
         fprintf(csv, "bandwidth_l2,,,,,,,,,,%.3f,,,\n", l2_peak * 1e-9);
+        fprintf(csv, "bandwidth_huge_pages,,,,,,,,,,%.3f,,,\n", huge_read * 1e-9);
     }
 
     const char *mname[3] = {"trilinear", "Taylor", "Hermite"};
-    double hermite8[2] = {0, 0}; /* SIMD s/vertex, lmax 8: L2, DRAM */
+    double hermite8[2] = {0, 0}, grid_huge_mb = -1.0; /* SIMD s/vertex, lmax 8: L2, DRAM; huge pages, lmax 8 DRAM grids */
     const int lmaxes[3] = {0, 4, 8}, lfirst = quick ? 2 : 0;
     printf("\n## Interpolation, one core: SIMD kernel (%s) vs scalar reference\n\n", isa);
     printf("Chunks of %d vertices per call (the output, %d x 3 nc doubles, stays in cache).  L2: 4^3-node grid;\n"
@@ -340,6 +389,7 @@ int main(int argc, char **argv)
             bench_progress("interpolation, lmax %d, %s grid: filling 2 x %d^3 nodes (step 3/5)...", lmax,
                            big ? "out-of-cache" : "L2", res);
             shl_grid *g = make_grid(ctx, res), *gr = make_grid(ctx_ref, res);
+            if (big && lmax == 8) grid_huge_mb = anon_huge_mb();
             for (int m = 0; m < 3; ++m) {
                 /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
                 bench_progress("interpolation, lmax %d, %s grid: timing %s (step 3/5)...", lmax, big ? "out-of-cache" : "L2",
@@ -380,6 +430,9 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx);
         shl_ctx_destroy(ctx_ref);
     }
+
+    printf("\nThe two lmax-8 out-of-cache grids (shl_grid_create: library allocation): %.0f MB of this process in huge pages.\n",
+           grid_huge_mb);
 
     /* The vertex order is the caller's: the library keeps it (results in the caller's order) */
     {
