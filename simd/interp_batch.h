@@ -39,47 +39,35 @@ void SHL_INTERP_SHORT_ROWS(const float *data, int method, int nc, const shl__int
                            double *out);
 #endif
 
-/* The point's weights (shl__interp_point), broadcast. */
-typedef struct {
-    vd w[8], wd[8][3];   /* trilinear / Taylor: w_j, w_j (p - p_j) */
-    vd hw[3][4];         /* Hermite basis per axis */
-    vd ux, vx, uy, vy;   /* u and 1 - u along x and y */
-} weights;
-
-static void broadcast(const shl__interp_point *s, weights *W)
-{
-    for (int j = 0; j < 8; ++j) {
-        W->w[j] = vd_set1(s->w[j]);
-        for (int a = 0; a < 3; ++a) W->wd[j][a] = vd_set1(s->wd[j][a]);
-    }
-    for (int a = 0; a < 3; ++a)
-        for (int i = 0; i < 4; ++i) W->hw[a][i] = vd_set1(s->hw[a][i]);
-    W->ux = vd_set1(s->u[0]);
-    W->vx = vd_set1(1.0 - s->u[0]);
-    W->uy = vd_set1(s->u[1]);
-    W->vy = vd_set1(1.0 - s->u[1]);
-}
-
 /* Start of the block after k in a row of n >= VL: the last one ends at n. */
 static inline int block_start(int k, int n) { return k + VL <= n ? k : n - VL; }
 
 /* Trilinear: out[i] = sum_j w_j f_j[i] over the 3 nc values (one contiguous row). */
-static void trilinear(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
+/* Each kernel broadcasts only the point's weights it reads: broadcasting all of them into one
+ * struct cost 48 vector stores per point (Hermite, lmax 4, avx512: 262 -> 221 ns per point). */
+static void trilinear(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
     const int n = 3 * nc;
+    vd w[8];
+    for (int j = 0; j < 8; ++j) w[j] = vd_set1(s->w[j]);
     shl__interp_ahead_plan(ahead, (size_t)(n + VL - 1) / VL);
     for (int k = 0; k < n; k += VL) {
         const int i = block_start(k, n);
         shl__interp_ahead_step(ahead);
-        vd v = vd_mul(W->w[0], vd_load_float(f[0] + i));
-        for (int j = 1; j < 8; ++j) v = vd_fma(W->w[j], vd_load_float(f[j] + i), v);
+        vd v = vd_mul(w[0], vd_load_float(f[0] + i));
+        for (int j = 1; j < 8; ++j) v = vd_fma(w[j], vd_load_float(f[j] + i), v);
         vd_store(out + i, v);
     }
 }
 
 /* Annen 2004 Eq. (15): sum_j w_j (c_j + grad c_j . d_j), per channel. */
-static void taylor(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
+static void taylor(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
+    vd w[8], wd[8][3];
+    for (int j = 0; j < 8; ++j) {
+        w[j] = vd_set1(s->w[j]);
+        for (int a = 0; a < 3; ++a) wd[j][a] = vd_set1(s->wd[j][a]);
+    }
     shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
@@ -88,21 +76,22 @@ static void taylor(const float *const f[8], const weights *W, int nc, shl__inter
             const size_t vo = (size_t)c * nc + i, go = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
             vd o = vd_set1(0.0f);
             for (int j = 0; j < 8; ++j) {
-                o = vd_fma(W->w[j], vd_load_float(f[j] + vo), o);
-                o = vd_fma(W->wd[j][0], vd_load_float(f[j] + go), o);
-                o = vd_fma(W->wd[j][1], vd_load_float(f[j] + go + nc), o);
-                o = vd_fma(W->wd[j][2], vd_load_float(f[j] + go + 2 * (size_t)nc), o);
+                o = vd_fma(w[j], vd_load_float(f[j] + vo), o);
+                o = vd_fma(wd[j][0], vd_load_float(f[j] + go), o);
+                o = vd_fma(wd[j][1], vd_load_float(f[j] + go + nc), o);
+                o = vd_fma(wd[j][2], vd_load_float(f[j] + go + 2 * (size_t)nc), o);
             }
             vd_store(out + vo, o);
         }
 }
 
 /* Wu 2020 Alg. 4 per channel: along x (lines 4-7), y (lines 8-11), z (line 12). */
-static void hermite(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
+static void hermite(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
-    const vd x0 = W->hw[0][0], x1 = W->hw[0][1], x2 = W->hw[0][2], x3 = W->hw[0][3];
-    const vd y0 = W->hw[1][0], y1 = W->hw[1][1], y2 = W->hw[1][2], y3 = W->hw[1][3];
-    const vd z0 = W->hw[2][0], z1 = W->hw[2][1], z2 = W->hw[2][2], z3 = W->hw[2][3];
+    const vd x0 = vd_set1(s->hw[0][0]), x1 = vd_set1(s->hw[0][1]), x2 = vd_set1(s->hw[0][2]), x3 = vd_set1(s->hw[0][3]);
+    const vd y0 = vd_set1(s->hw[1][0]), y1 = vd_set1(s->hw[1][1]), y2 = vd_set1(s->hw[1][2]), y3 = vd_set1(s->hw[1][3]);
+    const vd z0 = vd_set1(s->hw[2][0]), z1 = vd_set1(s->hw[2][1]), z2 = vd_set1(s->hw[2][2]), z3 = vd_set1(s->hw[2][3]);
+    const vd ux = vd_set1(s->u[0]), vx = vd_set1(1.0 - s->u[0]), uy = vd_set1(s->u[1]), vy = vd_set1(1.0 - s->u[1]);
     shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
@@ -115,14 +104,14 @@ static void hermite(const float *const f[8], const weights *W, int nc, shl__inte
                 const float *a = f[2 * q], *b = f[2 * q + 1];
                 g[q] = vd_fma(x0, vd_load_float(a + vo),
                               vd_fma(x1, vd_load_float(a + gxo), vd_fma(x2, vd_load_float(b + vo), vd_mul(x3, vd_load_float(b + gxo)))));
-                g_y[q] = vd_fma(W->vx, vd_load_float(a + gyo), vd_mul(W->ux, vd_load_float(b + gyo)));
-                g_z[q] = vd_fma(W->vx, vd_load_float(a + gzo), vd_mul(W->ux, vd_load_float(b + gzo)));
+                g_y[q] = vd_fma(vx, vd_load_float(a + gyo), vd_mul(ux, vd_load_float(b + gyo)));
+                g_z[q] = vd_fma(vx, vd_load_float(a + gzo), vd_mul(ux, vd_load_float(b + gzo)));
             }
             /* lines 8-11: along y; line 12: along z */
             const vd h0 = vd_fma(y0, g[0], vd_fma(y1, g_y[0], vd_fma(y2, g[1], vd_mul(y3, g_y[1]))));
             const vd h1 = vd_fma(y0, g[2], vd_fma(y1, g_y[2], vd_fma(y2, g[3], vd_mul(y3, g_y[3]))));
-            const vd h0_z = vd_fma(W->vy, g_z[0], vd_mul(W->uy, g_z[1]));
-            const vd h1_z = vd_fma(W->vy, g_z[2], vd_mul(W->uy, g_z[3]));
+            const vd h0_z = vd_fma(vy, g_z[0], vd_mul(uy, g_z[1]));
+            const vd h1_z = vd_fma(vy, g_z[2], vd_mul(uy, g_z[3]));
             vd_store(out + vo, vd_fma(z0, h0, vd_fma(z1, h0_z, vd_fma(z2, h1, vd_mul(z3, h1_z)))));
         }
 }
@@ -140,14 +129,12 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
     }
     const float *f[8];
     for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
-    weights W;
-    broadcast(s, &W);
     if (method == SHL_INTERP_TRILINEAR)
-        trilinear(f, &W, nc, ahead, out);
+        trilinear(f, s, nc, ahead, out);
     else if (method == SHL_INTERP_TAYLOR)
-        taylor(f, &W, nc, ahead, out);
+        taylor(f, s, nc, ahead, out);
     else
-        hermite(f, &W, nc, ahead, out);
+        hermite(f, s, nc, ahead, out);
     shl__interp_ahead_finish(ahead);
 }
 #endif

@@ -150,16 +150,18 @@ void lighting_free(lighting *L)
     free(L);
 }
 
-enum { BLOCK = 64 };
+enum { BLOCK = LIGHTING_BLOCK };
 
 typedef struct {
     const lighting *L;
     const double *pts;
-    float *coef;
+    lighting_consumer consume;
+    void *arg;
     par_progress *prog;
     double *out, *acc; /* per worker: 3 nc BLOCK outputs, 3 SHL__ZH_BLOCK accumulators */
-    float *pf;         /* per worker: 3 BLOCK float positions */
+    float *pf, *coef;  /* per worker: 3 BLOCK float positions, 3 nc BLOCK coefficients */
     int failed[SHL_MAX_THREADS]; /* per worker */
+    double t_eval[SHL_MAX_THREADS], t_consume[SHL_MAX_THREADS]; /* per worker, seconds */
 } eval_job;
 
 static uint64_t mix64(uint64_t x)
@@ -307,14 +309,15 @@ static void eval_block(void *arg, int worker, long begin, long end)
     const int nc = L->nc, nb = (int)(end - begin);
     const double *pts = j->pts + 3 * begin;
     double *out = j->out + 3 * (size_t)nc * BLOCK * (size_t)worker, *acc = j->acc + 3 * SHL__ZH_BLOCK * (size_t)worker;
-    float *pf = j->pf + 3 * BLOCK * (size_t)worker;
+    float *pf = j->pf + 3 * BLOCK * (size_t)worker, *coef = j->coef + 3 * (size_t)nc * BLOCK * (size_t)worker;
+    const double t0 = bench_now();
     switch (L->m.kind) {
     case LM_ANALYTIC:
         if (shl_lights_eval_batch(L->ctx, L->set, nb, pts, out, NULL) != SHL_OK) goto fail;
         break;
     case LM_ANALYTIC_F: /* the set in float through the SIMD kernels, straight into coef */
         for (int k = 0; k < 3 * nb; ++k) pf[k] = (float)pts[k];
-        if (shl_lights_eval_batch_f(L->ctx, L->set, nb, pf, j->coef + 3 * (size_t)nc * (size_t)begin, NULL) != SHL_OK)
+        if (shl_lights_eval_batch_f(L->ctx, L->set, nb, pf, coef, NULL) != SHL_OK)
             goto fail;
         break;
     case LM_GRID:
@@ -362,30 +365,42 @@ static void eval_block(void *arg, int worker, long begin, long end)
         break;
     }
     if (L->m.kind != LM_ANALYTIC_F)
-        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) j->coef[3 * (size_t)nc * (size_t)begin + k] = (float)out[k];
+        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) coef[k] = (float)out[k];
+    const double t1 = bench_now();
+    j->consume(j->arg, worker, begin, end, coef);
+    j->t_eval[worker] += t1 - t0;
+    j->t_consume[worker] += bench_now() - t1;
     par_progress_add(j->prog, nb);
     return;
 fail:
     j->failed[worker] = 1;
 }
 
-int lighting_eval(const lighting *L, long n, const double *pts, float *coef, int nthreads)
+int lighting_eval(const lighting *L, long n, const double *pts, int nthreads, lighting_consumer consume, void *arg,
+                  double *eval_share)
 {
     char name[128] = "lighting: ";
     lighting_name(&L->m, name + strlen(name), sizeof name - strlen(name));
     const int nw = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
-    eval_job j = {L, pts, coef, NULL, malloc(sizeof(double) * 3 * (size_t)L->nc * BLOCK * (size_t)nw),
-                  malloc(sizeof(double) * 3 * SHL__ZH_BLOCK * (size_t)nw), malloc(sizeof(float) * 3 * BLOCK * (size_t)nw), {0}};
-    int st = j.out && j.acc && j.pf ? 0 : -1;
+    eval_job j = {L, pts, consume, arg, NULL, malloc(sizeof(double) * 3 * (size_t)L->nc * BLOCK * (size_t)nw),
+                  malloc(sizeof(double) * 3 * SHL__ZH_BLOCK * (size_t)nw), malloc(sizeof(float) * 3 * BLOCK * (size_t)nw),
+                  malloc(sizeof(float) * 3 * (size_t)L->nc * BLOCK * (size_t)nw), {0}, {0}, {0}};
+    int st = j.out && j.acc && j.pf && j.coef ? 0 : -1;
     if (!st) {
         j.prog = par_progress_begin(name, n);
         par_for(n, BLOCK, nw, eval_block, &j);
         par_progress_end(j.prog);
-        for (int w = 0; w < nw; ++w)
+        double te = 0.0, tc = 0.0;
+        for (int w = 0; w < nw; ++w) {
             if (j.failed[w]) st = -1;
+            te += j.t_eval[w];
+            tc += j.t_consume[w];
+        }
+        *eval_share = te + tc > 0.0 ? te / (te + tc) : 1.0;
     }
     free(j.out);
     free(j.acc);
     free(j.pf);
+    free(j.coef);
     return st;
 }

@@ -40,8 +40,16 @@ typedef struct lighting lighting;
  * *fill_seconds: its wall time.  NULL on failure. */
 lighting *lighting_prepare(const scene *s, const lighting_method *m, const double lo[3], const double hi[3],
                            int nthreads, double *fill_seconds);
-/* Coefficients at n points into coef[(size_t)p * 3 * nc ...].  0 or -1. */
-int lighting_eval(const lighting *L, long n, const double *pts, float *coef, int nthreads);
+/* Consumer of lighting_eval: points [begin, end) (end - begin <= LIGHTING_BLOCK), their
+ * coefficients coef[(size_t)(p - begin) * 3 * nc ...], as worker `worker`. */
+enum { LIGHTING_BLOCK = 64 };
+typedef void (*lighting_consumer)(void *arg, int worker, long begin, long end, const float *coef);
+/* Coefficients at n points, block by block into per-worker scratch, each block handed to
+ * consume(arg, ...) while it is in cache (no n-point coefficient buffer).  *eval_share: the
+ * fraction of the workers' time spent evaluating (the rest consuming), from CLOCK_MONOTONIC
+ * around each block's two parts.  0 or -1. */
+int lighting_eval(const lighting *L, long n, const double *pts, int nthreads, lighting_consumer consume, void *arg,
+                  double *eval_share);
 void lighting_free(lighting *L);
 /* "grid 8^3 Hermite" etc. */
 const char *lighting_name(const lighting_method *m, char *buf, size_t len);

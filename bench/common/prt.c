@@ -141,7 +141,6 @@ void prt_free(prt *p)
     hvl_free(&p->hvl);
     free(p->mask);
     free(p->indirect);
-    free(p->coef);
     free(p->vrad);
     memset(p, 0, sizeof *p);
 }
@@ -164,7 +163,8 @@ typedef struct {
     const double *lobe; /* per material: lmax+1 ZH (glossy materials) */
 } shade_job;
 
-static void shade_block(void *arg, int worker, long begin, long end)
+/* Shades points [begin, end) from their coefficients coef (lighting_eval's consumer). */
+static void shade_block(void *arg, int worker, long begin, long end, const float *coef)
 {
     (void)worker;
     const shade_job *j = arg;
@@ -175,7 +175,7 @@ static void shade_block(void *arg, int worker, long begin, long end)
     for (long i = begin; i < end; ++i) {
         const long v = j->subset ? j->subset[i] : i;
         const scene_material *mt = &s->mats[s->geom.mat[v]];
-        const float *L = p->coef + (size_t)i * 3 * ncl, *T = p->T.t + (size_t)v * nct;
+        const float *L = coef + (size_t)(i - begin) * 3 * ncl, *T = p->T.t + (size_t)v * nct;
         float *out = p->vrad + 3 * v;
         double d0 = 0.0, d1 = 0.0, d2 = 0.0; /* three independent sums, each in the order of k */
         for (int k = 0; k < nc; ++k) {
@@ -220,14 +220,6 @@ int prt_render(prt *p, const lighting_method *m, const int *subset, long nsub, f
     double *pts = NULL, *lobe = NULL;
     lighting *L = NULL;
     int st = -1;
-    if ((size_t)n * 3 * ncl > p->coef_len) {
-        free(p->coef);
-        p->coef_len = (size_t)n * 3 * ncl;
-        if (!(p->coef = malloc(sizeof(float) * p->coef_len))) {
-            p->coef_len = 0;
-            return -1;
-        }
-    }
     if (subset) {
         if (!(pts = malloc(sizeof(double) * 3 * (size_t)(n + 1)))) return -1;
         for (long i = 0; i < n; ++i) memcpy(pts + 3 * i, s->geom.pos + 3 * (size_t)subset[i], sizeof(double) * 3);
@@ -242,13 +234,14 @@ int prt_render(prt *p, const lighting_method *m, const int *subset, long nsub, f
         if (mt->kind == MAT_GGX && shl_zh_ggx(m->lmax, mt->alpha, z) != SHL_OK) goto done;
     }
     if (!(L = lighting_prepare(s, m, p->lo, p->hi, p->nthreads, &t->prepare))) goto done;
-    double t0 = bench_now();
-    if (lighting_eval(L, n, subset ? pts : s->geom.pos, p->coef, p->nthreads)) goto done;
-    t->lighting = bench_now() - t0;
-    t0 = bench_now();
+    /* Lighting and shading fused per block of LIGHTING_BLOCK vertices (the coefficients stay in
+     * cache); their wall time is split between the two by the workers' time in each. */
+    double t0 = bench_now(), share;
     shade_job j = {p, subset, ncl, m->lmax, glossy, lobe};
-    par_for(n, 512, p->nthreads, shade_block, &j);
-    t->shade = bench_now() - t0;
+    if (lighting_eval(L, n, subset ? pts : s->geom.pos, p->nthreads, shade_block, &j, &share)) goto done;
+    const double wall = bench_now() - t0;
+    t->lighting = wall * share;
+    t->shade = wall - t->lighting;
     t0 = bench_now();
     const float *colors[3] = {p->vrad, p->emit_rgb[0], p->emit_rgb[1]};
     raster_resolve(&p->fb, p->rm, colors, img, p->nthreads);

@@ -38,8 +38,6 @@ typedef struct {
     unsigned char *mask;      /* pixels showing receivers */
     hvl_set hvl;
     float *indirect;          /* per-vertex HVL radiance, or NULL */
-    float *coef;              /* lighting coefficients of the last render */
-    size_t coef_len;
     float *vrad;              /* per-vertex radiance of the last render, 3 nv */
     prt_stage stage[16];
     int nstages;
@@ -48,8 +46,8 @@ typedef struct {
 
 typedef struct {
     double prepare;  /* lighting_prepare: grid fill, single sample */
-    double lighting; /* per-vertex coefficients */
-    double shade;    /* transfer dot products (+ glossy lobes) */
+    double lighting; /* per-vertex coefficients } run fused per block of vertices: their wall */
+    double shade;    /* transfer dot products (+ glossy lobes) } time split by the workers' time in each */
     double resolve;  /* per-vertex radiance through the visibility buffer */
 } prt_times;
 
