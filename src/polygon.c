@@ -479,18 +479,15 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
 }
 
-#define REAL double
-#define WITH_GRAD 0
-#define SUFFIX(name) name##_d
-#include "polygon_zh.h"
-#undef SUFFIX
-#undef WITH_GRAD
-#define WITH_GRAD 1
-#define SUFFIX(name) name##_grad_d
-#include "polygon_zh.h"
-#undef SUFFIX
-#undef WITH_GRAD
-#undef REAL
+/* The double recurrence is the scalar ISA's kernel (simd/poly_zh_batch.h, lobes
+ * two side by side); shl_polygon and shl_polygon_grad call their context's ISA. */
+void shl__poly_zh_scalar(const shl__poly_geom *g, int lmax, double *zh);
+void shl__poly_zh_grad_scalar(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+void shl__poly_zh_d(const shl__poly_geom *g, int lmax, double *zh) { shl__poly_zh_scalar(g, lmax, zh); }
+void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
+{
+    shl__poly_zh_grad_scalar(g, lmax, zh, zh_grad);
+}
 
 /* Float instances of the recurrence (fk: float kernel), wrapped below. */
 void shl__poly_zh_fk(const shl__poly_geom *g, int lmax, float *zh);
@@ -570,7 +567,7 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
     shl__poly_geom g;
     double zh[SHL__ZH_BLOCK];
     shl__poly_geom_init(&g, x, verts, n);
-    shl__poly_zh_d(&g, ctx->lmax, zh);
+    ctx->isa->poly_zh(&g, ctx->lmax, zh);
     shl__zh_to_sh(ctx->lmax, zh, coeffs);
     return SHL_OK;
 }
@@ -609,11 +606,10 @@ int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts,
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    double zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
+    double zh[4 * SHL__ZH_BLOCK]; /* value, then the 3 gradient blocks */
     shl__poly_geom_init(&g, x, verts, n);
-    shl__poly_zh_grad_d(&g, ctx->lmax, zh, zh_grad);
-    shl__zh_to_sh(ctx->lmax, zh, coeffs);
-    for (int a = 0; a < 3; ++a) shl__zh_to_sh(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    ctx->isa->poly_zh_grad(&g, ctx->lmax, zh, zh + SHL__ZH_BLOCK);
+    shl__zh_to_sh_grad(ctx->lmax, zh, coeffs, grad, ctx->nc);
     shl__poly_grad_unscale(&g, grad, 3 * ctx->nc);
     return SHL_OK;
 }

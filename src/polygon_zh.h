@@ -22,7 +22,8 @@
  * differences) and write s P(a_{e+1}) + b P(a_e) = B_1 P(a_e) + s dP, with
  * B_1 = a sin(gamma) + b (1 - cos(gamma)) formed in double.
  *
- * Loop order.  Lobes in blocks of SHL__ZH_LANES side by side (their recurrences
+ * Loop order (the float instances; the double recurrence is simd/poly_zh_batch.h,
+ * the same arithmetic across lobes in vectors).  Lobes in blocks of SHL__ZH_LANES side by side (their recurrences
  * are independent: with one lobe at a time every band step waited on the
  * previous one), edges next, bands innermost with the lanes inside each band
  * step, so the lanes' chains overlap in the pipeline (or share SIMD registers).
