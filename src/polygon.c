@@ -158,7 +158,8 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     }
     const double a = fabs(height);
     double abs_total = 0.0, theta = 0.0, delta = 0.0, abs_delta = 0.0;
-    int foot_near_boundary = 0;
+    double num_i[SHL_MAX_VERTS], den_i[SHL_MAX_VERTS], dot_i[SHL_MAX_VERTS], s_i[SHL_MAX_VERTS];
+    int foot_near_boundary = 0, npos = 0, nneg = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         double ei[3], ej[3], edge[3], c[3];
@@ -190,6 +191,16 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         const double term = 2.0 * atan2(num, den);
         total += term;
         abs_total += fabs(term);
+        npos += term > 0.0, nneg += term < 0.0;
+        num_i[i] = num, den_i[i] = den, dot_i[i] = dot, s_i[i] = si;
+    }
+    /* Terms of one sign: the direct sum's magnitude sum is |total|, the least any form
+     * can have, so the split below could not be chosen for a smaller one. */
+    if (foot_near_boundary || npos == 0 || nneg == 0) return fabs(total);
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1 == n) ? 0 : i + 1;
+        const double num = num_i[i], den = den_i[i], dot = dot_i[i], si = s_i[i], sj = s_i[j];
+        const double ri = dist[i], rj = dist[j];
         const double den0 = dot >= 0.0 ? si * sj + dot : num * num / (si * sj - dot);
         theta += 2.0 * atan2(num, den0);
         const double p = a * (si * si + sj * sj + a * a) / (ri * rj + si * sj) + ri + rj + a;
@@ -198,7 +209,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         abs_delta += fabs(dterm);
     }
     const double k = nearbyint(theta / (2.0 * M_PI));
-    if (!foot_near_boundary && 2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
+    if (2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
     return fabs(total);
 }
 
@@ -307,11 +318,20 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
         const double clen = shl__norm3(c);
         /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
-        g->gamma[e] = atan2(clen, shl__dot3(g->rel[e], g->rel[f]));
-        g->sin_gamma[e] = sin(g->gamma[e]);
-        g->cos_gamma[e] = cos(g->gamma[e]);
-        const double half = sin(0.5 * g->gamma[e]);
-        g->omc_gamma[e] = 2.0 * half * half;
+        const double dotp = shl__dot3(g->rel[e], g->rel[f]), rr = g->dist[e] * g->dist[f];
+        g->gamma[e] = atan2(clen, dotp);
+        if (rr >= 0x1p-900) { /* |c| = r_e r_f sin(gamma), rel_e . rel_f = r_e r_f cos(gamma): a few ulps */
+            g->sin_gamma[e] = clen / rr;
+            g->cos_gamma[e] = dotp / rr;
+            /* 1 - cos = sin^2 / (1 + cos) without cancellation where cos > 0 */
+            g->omc_gamma[e] = dotp > 0.0 ? g->sin_gamma[e] * g->sin_gamma[e] / (1.0 + g->cos_gamma[e])
+                                         : 1.0 - g->cos_gamma[e];
+        } else {
+            g->sin_gamma[e] = sin(g->gamma[e]);
+            g->cos_gamma[e] = cos(g->gamma[e]);
+            const double half = sin(0.5 * g->gamma[e]);
+            g->omc_gamma[e] = 2.0 * half * half;
+        }
         /* w_f - w_e = edge/r_f + w_e (r_e - r_f)/r_f, r_e - r_f = -edge.(rel_e + rel_f)/(r_e + r_f):
          * no cancellation for an edge short against the distances; for a longer one its terms
          * can reach |edge| / min(r) (and overflow), while w_f - w_e itself is then accurate */

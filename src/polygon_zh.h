@@ -1,7 +1,8 @@
 /* ZH recurrence of Wang & Ramamoorthi 2018 (Sec. 4.1, Alg. 1), optionally with
  * the spatial gradient of every ZH integral (Wu et al. 2020, Sec. 5), in one
  * pass that shares the B/D edge recurrences and the Legendre values at the
- * vertices.  Instantiated by polygon.c with REAL = double/float and
+ * vertices.  Instantiated by polygon.c with REAL = float (the double version is
+ * simd/poly_zh_batch.h, the same arithmetic) and
  * WITH_GRAD = 0/1; SUFFIX names the instance.
  *
  * Gradient.  Wu 2020 Eq. (10)-(16): d/dx_a of the ZH integral of lobe w_c is
