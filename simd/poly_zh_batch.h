@@ -5,9 +5,9 @@
  * SHL_VDLEN (4 on AVX2), at least 2 (the scalar ISA: two SSE2 / NEON lanes or
  * plain code).  The lobes' recurrences are independent, so one band step of ZW
  * lobes is one chain of vector operations instead of ZW chains.  Written with the
- * compilers' generic vector type (elementwise + - *, no fused multiply-add under
- * C11's FP_CONTRACT off in gcc); every lane runs the same arithmetic, so all ISAs
- * give the same bits with gcc.  Eq. 11, 30 and 31 are used with their ratios of
+ * compilers' generic vector type (elementwise + - *, no fused multiply-add: gcc's
+ * C11 mode and the clang pragma below); every lane runs the same arithmetic, so all
+ * ISAs give the same bits.  Eq. 11, 30 and 31 are used with their ratios of
  * integers folded into per-band constants (fewer operations and shorter
  * dependency chains per band step; rounding differs from polygon_zh.h's float
  * instance by a few ulps of each step).  A partial last block repeats its last lobe.  Compiled once
@@ -16,6 +16,10 @@
 #include "../src/polygon.h"
 #include "kernel_api.h"
 #include <string.h>
+
+#ifdef __clang__
+#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
+#endif
 
 #if defined(SHL_VDLEN) && SHL_VDLEN > 2
 #define ZW SHL_VDLEN
