@@ -116,15 +116,27 @@ $(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h) $(HDRS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Itests -c $< -o $@
 
-# The benchmark harness (bench/common) is linked into the test runner too:
-# tests/test_render.c renders a tiny scene with it.
-HARNESS_OBJ := $(BENCH_COMMON)
-$(BUILD)/tests/run_tests: $(HARNESS_OBJ)
+# The benchmark harness (bench/common) is built once, into the static archive $(BENCH_LIB), which
+# the bench programs and the test runner link (tests/test_render.c renders a tiny scene with it).
+# Its parallel loop is the library's (src/parallel.h): it links the library statically, with
+# libshlight.a or the test build's objects.
+BENCH_LIB := $(BUILD)/libshlbench.a
+$(BENCH_LIB): $(BENCH_COMMON)
+	@rm -f $@
+	ar rcs $@ $^
+$(BUILD)/tests/run_tests: $(BENCH_LIB)
 $(BUILD)/tests/test_render.o: CFLAGS_ALL += -Ibench/common
 $(BUILD)/tests/test_render.o: $(wildcard bench/common/*.h)
 
+# A full run also writes its lines to $(BUILD)/test.log (read by check-readme-figures).
 test: $(BUILD)/tests/run_tests
-	$(BUILD)/tests/run_tests $(TEST_FILTER)
+	$(BUILD)/tests/run_tests $(TEST_FILTER) $(if $(TEST_FILTER),,--log $(BUILD)/test.log)
+
+# README's measured figures against what the last full `make test` printed.
+.PHONY: check-readme-figures
+check-readme-figures:
+	@test -f $(BUILD)/test.log || $(MAKE) test
+	python3 tools/check_readme_figures.py $(BUILD)/test.log README.md
 
 # The whole suite on AArch64 (scalar and NEON kernels): cross-compiled with
 # Debian's gcc-aarch64-linux-gnu, run under qemu-user emulation.
@@ -148,9 +160,9 @@ $(BUILD)/bench/common/%.o: bench/common/%.c $(wildcard bench/common/*.h include/
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -Ibench/common -DSHL_BUILD_FLAGS="\"$(CSTD) $(OPT)\"" -c $< -o $@
 
-$(BUILD)/bench/%: bench/%.c $(BENCH_COMMON) $(STATIC) $(wildcard bench/common/*.h)
+$(BUILD)/bench/%: bench/%.c $(BENCH_LIB) $(STATIC) $(wildcard bench/common/*.h)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_ALL) -Ibench/common $(LDFLAGS) -o $@ $< $(BENCH_COMMON) $(STATIC) $(LDLIBS)
+	$(CC) $(CFLAGS_ALL) -Ibench/common $(LDFLAGS) -o $@ $< $(BENCH_LIB) $(STATIC) $(LDLIBS)
 
 bench: $(BENCH_BIN)
 
@@ -162,12 +174,15 @@ demo: $(BUILD)/bench/demo
 # Writes $(BUILD)/bench-tables/ (RESULTS-tables.md, tables/*.csv, manifest.txt), never the tracked
 # files; BENCH_TABLES_SECTIONS="annen hvl" runs a subset (not accepted).  bench-tables-accept
 # copies a complete run (manifest: "complete: yes") over bench/RESULTS-tables.md and bench/tables/,
-# and the plots that `make plots` drew from it over bench/plots/.
+# and the plots that `make plots` drew from it over bench/plots/.  HVL Table 2's path-traced
+# reference runs tools/hvl_reference.py in the oracle venv ($(VENV)) when it exists (~15 s, then
+# cached in $(BUILD)/bench-tables/hvl2022_table2/cache); without it that table says so.
 BENCH_TABLES_DIR := $(BUILD)/bench-tables
 .PHONY: bench-tables bench-tables-accept
 bench-tables: $(BUILD)/bench/bench_tables
 	@rm -f $(BENCH_TABLES_DIR)/plots/*.png $(BENCH_TABLES_DIR)/plots/*.svg
-	$(BUILD)/bench/bench_tables -o $(BENCH_TABLES_DIR) $(if $(SHLIGHT_MESHES),--meshes $(SHLIGHT_MESHES)) $(BENCH_TABLES_SECTIONS)
+	SHLIGHT_ORACLE_PYTHON=$(if $(wildcard $(VENV)/bin/python),$(abspath $(VENV)/bin/python)) \
+	  $(BUILD)/bench/bench_tables -o $(BENCH_TABLES_DIR) $(if $(SHLIGHT_MESHES),--meshes $(SHLIGHT_MESHES)) $(BENCH_TABLES_SECTIONS)
 
 bench-tables-accept:
 	@grep -qx 'complete: yes' $(BENCH_TABLES_DIR)/manifest.txt 2>/dev/null || { \
@@ -366,6 +381,7 @@ help:
 	@printf '  %-19s %-64s %s\n' oracle 'full Mitsuba 3 / Dr.Jit comparison, writes bench/ORACLE.md' '39 min'
 	@printf '  %-19s %-64s %s\n' oracle-check 'the CI subset of the oracle (20 configurations, one image)' '4 min'
 	@printf '  %-19s %-64s %s\n' check-symbols 'the .so exports only shl_[a-z]*, has its SONAME; internal boundary' '<1 s + build'
+	@printf '  %-19s %-64s %s\n' check-readme-figures "README's test figures equal what the last full make test printed" '<1 s'
 	@printf '  %-19s %-64s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
 	@printf '  %-19s %-64s %s\n' help 'this list' 'instant'
 	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, PREFIX (/usr/local), DESTDIR,'

@@ -5,23 +5,46 @@
  *    vertex order: every corner misses);
  *  - the context's SIMD kernel (simd/interp_batch.h) against the scalar reference
  *    (SHLIGHT_ISA=scalar: src/interp_kernel.h), as a ratio within each round;
- *  - grid bytes read per vertex and the achieved share of this core's memory bandwidth,
- *    measured in the same run (STREAM-like read and triad kernels);
+ *  - grid bytes read per vertex and the achieved share of this core's read bandwidth,
+ *    measured in the same run (STREAM-like read and triad kernels): from DRAM for the
+ *    out-of-cache grid, from an L2-resident array of the L2 grid's size for the L2 grid;
+ *  - before/after of the look-ahead (src/interp.c: the next vertex's corner rows are
+ *    requested during the current vertex's arithmetic) in the same run: calls of one
+ *    vertex have no next vertex, so they run the previous order (one vertex's rows at a
+ *    time, on demand);
  *  - per-vertex set-up cost: lmax 0 (3 coefficients, shorter than a vector: both
  *    variants run the reference) is the cell search and weights plus 8 tiny loads,
  *    the part vectorizing across coefficients does not touch; 2 threads against 1;
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
  * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
+#if defined(__linux__) && !defined(_DEFAULT_SOURCE)
+#define _DEFAULT_SOURCE /* madvise, MADV_HUGEPAGE: the huge-page read bandwidth (informational) */
+#endif
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
-enum { CHUNK = 128, NPTS = 1 << 16, ROUNDS = 11 };
+enum { CHUNK = 128, NPTS = 1 << 16, MAX_ROUNDS = 11 };
 
+static int rounds = MAX_ROUNDS; /* --quick: 3 */
+
+/* Clock of the one-core timings: wall clock, or (--cpu-time) this thread's CPU time, which
+ * leaves out the time other processes hold the core (memory stalls still count). */
+static double thread_cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+static double (*one_core_now)(void) = bench_now;
 static size_t max_bytes; /* --mb: a cap on out_of_cache_bytes (0: none) */
 
 /* Bytes that cannot stay in any cache: 4 x the last-level cache, at least 120 MB
@@ -52,33 +75,65 @@ static void *xmalloc(size_t n)
     return p;
 }
 
+/* n bytes, 2 MiB-aligned and advised as huge pages where the kernel has the advice (as the
+ * library's grid nodes of >= 4 MiB, src/alloc.c); *advised: 1 if the advice was taken. */
+static void *huge_malloc(size_t n, int *advised)
+{
+    const size_t page = (size_t)2 << 20, padded = (n + page - 1) / page * page;
+    void *p = aligned_alloc(page, padded);
+    if (!p) {
+        fprintf(stderr, "bench_interp: out of memory (%zu bytes)\n", padded);
+        exit(1);
+    }
+    *advised = 0;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    *advised = madvise(p, padded, MADV_HUGEPAGE) == 0;
+#endif
+    return p;
+}
+
+/* This process's anonymous memory in transparent huge pages, MB (Linux; -1 elsewhere). */
+static double anon_huge_mb(void)
+{
+    FILE *f = fopen("/proc/self/smaps_rollup", "r");
+    if (!f) return -1.0;
+    char line[256];
+    double kb = -1.0;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "AnonHugePages: %lf kB", &kb) == 1) break;
+    fclose(f);
+    return kb < 0 ? -1.0 : kb / 1024.0;
+}
+
 /* ---- memory bandwidth of this core: read (sum) and triad a = b + s c ---- */
 static size_t bw_doubles; /* out_of_cache_bytes() / 8, at least 256 MB: far beyond the caches */
 
-static double read_bw(const double *a)
+/* Bytes per second reading a[0 .. n) reps times (n a multiple of 8). */
+static double read_bw(const double *a, size_t n, int reps)
 {
     double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0, s6 = 0, s7 = 0;
-    const double t0 = bench_now();
-    for (size_t i = 0; i < bw_doubles; i += 8) {
-        s0 += a[i];
-        s1 += a[i + 1];
-        s2 += a[i + 2];
-        s3 += a[i + 3];
-        s4 += a[i + 4];
-        s5 += a[i + 5];
-        s6 += a[i + 6];
-        s7 += a[i + 7];
-    }
-    const double t = bench_now() - t0;
+    const double t0 = one_core_now();
+    for (int r = 0; r < reps; ++r)
+        for (size_t i = 0; i < n; i += 8) {
+            s0 += a[i];
+            s1 += a[i + 1];
+            s2 += a[i + 2];
+            s3 += a[i + 3];
+            s4 += a[i + 4];
+            s5 += a[i + 5];
+            s6 += a[i + 6];
+            s7 += a[i + 7];
+        }
+    const double t = one_core_now() - t0;
     bench_sink += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7;
-    return bw_doubles * sizeof(double) / t;
+    return (double)reps * n * sizeof(double) / t;
 }
 
 static double triad_bw(double *a, const double *b, const double *c, size_t n)
 {
-    const double s = 1.0000001, t0 = bench_now();
+    const double s = 1.0000001, t0 = one_core_now();
     for (size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
-    const double t = bench_now() - t0;
+    const double t = one_core_now() - t0;
     bench_sink += a[n / 2];
     return 3.0 * n * sizeof(double) / t; /* STREAM convention: 24 bytes per element */
 }
@@ -122,14 +177,16 @@ typedef struct {
     long npts;           /* vertices per timed call: chunks over pts[0 .. npts) */
     const double *pts;
     double *out;         /* chunk * 3 nc doubles, reused: stays in cache */
+    int wall;            /* timed by the wall clock even with --cpu-time (thread comparisons) */
 } job;
 
 static double run(const job *j) /* seconds per vertex */
 {
-    const double t0 = bench_now();
+    double (*now)(void) = j->wall ? bench_now : one_core_now;
+    const double t0 = now();
     for (long p = 0; p < j->npts; p += j->chunk)
         must(shl_grid_interp(j->g, j->method, 2.0, (int)j->chunk, j->pts + 3 * p, j->out, j->nthreads), "interp");
-    const double t = bench_now() - t0;
+    const double t = now() - t0;
     bench_sink += j->out[1];
     return t / (double)j->npts;
 }
@@ -142,6 +199,38 @@ static double bytes_per_vertex(int method, int nc)
 }
 
 static FILE *csv;
+
+/* Vertices sorted by the cell they fall in (cells numbered x fastest) on a res^3 grid over [0, 1]^3. */
+typedef struct {
+    long cell;
+    double p[3];
+} keyed_point;
+
+static int by_cell(const void *a, const void *b)
+{
+    const long x = ((const keyed_point *)a)->cell, y = ((const keyed_point *)b)->cell;
+    return (x > y) - (x < y);
+}
+
+static double *sorted_by_cell(const double *pts, long n, int res)
+{
+    keyed_point *k = xmalloc(sizeof *k * n);
+    for (long i = 0; i < n; ++i) {
+        long cell = 0;
+        for (int a = 2; a >= 0; --a) {
+            const int c = (int)(pts[3 * i + a] * (res - 1));
+            cell = cell * (res - 1) + (c < res - 2 ? c : res - 2);
+            k[i].p[a] = pts[3 * i + a];
+        }
+        k[i].cell = cell;
+    }
+    qsort(k, n, sizeof *k, by_cell);
+    double *out = xmalloc(sizeof(double) * 3 * n);
+    for (long i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) out[3 * i + a] = k[i].p[a];
+    free(k);
+    return out;
+}
 
 /* Polygon batch (shl_polygon_batch_f) at lmax 8 on 256 points per call: seconds per point. */
 static double polygon_batch_time(int n, int with_grad, const double *pts)
@@ -157,41 +246,49 @@ static double polygon_batch_time(int n, int with_grad, const double *pts)
         v[3 * i + 2] = 2.0f;
     }
     for (int k = 0; k < 3 * NP; ++k) p[k] = (float)(2.0 * pts[k] - 1.0);
-    double t[ROUNDS];
-    for (int r = 0; r <= ROUNDS; ++r) { /* round 0: warm-up */
-        const double t0 = bench_now();
+    double t[MAX_ROUNDS];
+    for (int r = 0; r <= rounds; ++r) { /* round 0: warm-up */
+        const double t0 = one_core_now();
         for (int q = 0; q < 40; ++q)
             must(shl_polygon_batch_f(ctx, v, n, NP, p, out, with_grad ? grad : NULL), "polygon_batch");
-        if (r) t[r - 1] = (bench_now() - t0) / (40.0 * NP);
+        if (r) t[r - 1] = (one_core_now() - t0) / (40.0 * NP);
     }
     bench_sink += out[1];
     shl_ctx_destroy(ctx);
-    return bench_median(t, ROUNDS);
+    return bench_median(t, rounds);
 }
 
 int main(int argc, char **argv)
 {
-    const char *csv_path = "build/bench/bench_interp.csv", *mb_arg = NULL;
+    const char *csv_path = "build/bench/bench_interp.csv", *mb_arg = NULL, *quick = NULL, *cpu_time = NULL;
     const double gb = (double)out_of_cache_bytes() / (1 << 30);
     char about[2048];
     snprintf(about, sizeof about,
              "Grid interpolation (shl_grid_interp, float storage): vertices per second for trilinear, Taylor and\n"
              "Hermite at lmax 0, 4 and 8 from an L2-resident grid and from a grid far larger than the caches\n"
-             "(random vertex order), the SIMD kernel against the scalar reference, bytes per vertex and the\n"
-             "share of this core's memory bandwidth (measured in the same run), 2 threads against 1, and the\n"
-             "papers' GPU throughput next to ours.\n"
+             "(random vertex order), the SIMD kernel against the scalar reference, with and without the\n"
+             "look-ahead (calls of one vertex: the order before it), bytes per vertex and the share of this\n"
+             "core's read bandwidth (DRAM, resp. L2, measured in the same run), random vs cell-sorted vertex\n"
+             "order, 2 threads against 1, and the papers' GPU throughput next to ours.\n"
              "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
              "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
              "--mb "
              "caps S (smaller S: faster, but a large L3 may then hold part of the grid).\n"
-             "About 2-3 minutes on an idle 2-core machine with S = 1.5 GB (14 minutes at load average 13);\n"
+             "About 3-4 minutes on an idle 2-core machine with S = 1.5 GB (14 minutes at load average 13);\n"
              "progress on stderr.\n"
+             "--quick: lmax 8 only, 3 rounds (a check that it works, not a measurement).  --cpu-time: the one-core\n"
+             "timings (bandwidths too) in this thread's CPU time, which leaves out the time other processes hold\n"
+             "the core: on a loaded machine; the 2-thread comparison stays wall clock.\n"
              "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
              gb);
     const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_interp.csv)"},
-                              {"-m", "--mb", "MB", &mb_arg, "cap on the out-of-cache size S in MB (at least 16)"}};
-    const bench_cli cli = {"bench_interp", "[-o FILE] [--mb MB]", about, opts, 2, 0};
+                              {"-m", "--mb", "MB", &mb_arg, "cap on the out-of-cache size S in MB (at least 16)"},
+                              {"-q", "--quick", NULL, &quick, "lmax 8 only, 3 rounds (default: lmax 0, 4, 8, 11 rounds)"},
+                              {"-c", "--cpu-time", NULL, &cpu_time, "one-core timings in thread CPU time (default: wall clock)"}};
+    const bench_cli cli = {"bench_interp", "[-o FILE] [--mb MB] [--quick] [--cpu-time]", about, opts, 4, 0};
     bench_parse(&cli, argc, argv, NULL);
+    if (quick) rounds = 3;
+    if (cpu_time) one_core_now = thread_cpu_now;
     if (mb_arg) {
         char *end;
         const long mb = strtol(mb_arg, &end, 10);
@@ -208,6 +305,7 @@ int main(int argc, char **argv)
     must(shl_ctx_create(0, &probe), "ctx");
     const char *isa = shl_ctx_isa(probe);
     printf("library: %s\nSIMD ISA: %s; reference: SHLIGHT_ISA=scalar (src/interp_kernel.h)\n", shl_build_info(), isa);
+    printf("clock of the one-core timings: %s\n", cpu_time ? "thread CPU time (--cpu-time)" : "wall");
 
     /* vertices: uniform in the box, in random order (no locality between neighbours) */
     double *pts = xmalloc(sizeof(double) * 3 * NPTS);
@@ -222,38 +320,64 @@ int main(int argc, char **argv)
            *bw_c = xmalloc(sizeof(double) * bw_doubles / 4);
     for (size_t i = 0; i < bw_doubles; ++i) bw_a[i] = 1.0 / (1.0 + (double)(i & 1023));
     for (size_t i = 0; i < bw_doubles / 4; ++i) bw_b[i] = bw_c[i] = bw_a[i], bw_a[i] = 0.0;
-    double rbw[5], tbw[5];
+    /* L2: an array of the L2 grid's size at lmax 8 (4^3 nodes), read again and again */
+    int l2_node_bytes;
+    shl_grid_bytes_per_node(8, SHL_GRID_FLOAT, &l2_node_bytes);
+    const size_t l2_doubles = (size_t)64 * l2_node_bytes / sizeof(double) & ~(size_t)7;
+    /* The reference is the read bandwidth of ordinary memory (malloc: 4 KiB pages unless the
+     * kernel's THP mode is "always"), what a streaming read gets without any help; the same
+     * read from an array advised as huge pages, like the library's large grids, is shown too. */
+    int hp_advised;
+    double *bw_h = huge_malloc(sizeof(double) * bw_doubles, &hp_advised);
+    for (size_t i = 0; i < bw_doubles; ++i) bw_h[i] = 1.0 / (1.0 + (double)(i & 1023));
+    double rbw[5], tbw[5], l2bw[5], hbw[5];
     bench_progress("memory bandwidth, 5 rounds (step 2/5)...");
     for (int r = 0; r < 5; ++r) {
-        rbw[r] = read_bw(bw_a);
+        rbw[r] = read_bw(bw_a, bw_doubles, 1);
+        hbw[r] = read_bw(bw_h, bw_doubles, 1);
         tbw[r] = triad_bw(bw_a, bw_b, bw_c, bw_doubles / 4);
+        read_bw(bw_b, l2_doubles, 10); /* warm */
+        l2bw[r] = read_bw(bw_b, l2_doubles, 2000);
     }
-    const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5);
+    const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5), l2_peak = bench_median(l2bw, 5);
+    const double huge_read = bench_median(hbw, 5), huge_mb = anon_huge_mb();
+    free(bw_h);
     free(bw_a); /* before the grids: the peak memory is then two grids, not the arrays as well */
     free(bw_b);
     free(bw_c);
     const double mb = sizeof(double) * (double)bw_doubles / (1 << 20);
     printf("\nLast-level cache (sysconf): %ld KB; out-of-cache size: %.0f MB\n", sysconf(_SC_LEVEL3_CACHE_SIZE) / 1024,
            (double)out_of_cache_bytes() / (1 << 20));
-    printf("Memory bandwidth, one core (median of 5): read (sum of %.0f MB) %.1f GB/s, triad (3 x %.0f MB, 24 B/element) %.1f GB/s\n",
-           mb, read_peak * 1e-9, mb / 4, triad_peak * 1e-9);
+    printf("Memory bandwidth, one core (median of 5): read (sum of %.0f MB) %.1f GB/s, triad (3 x %.0f MB, 24 B/element) %.1f GB/s;\n"
+           "L2 read (sum of %.0f KB, the L2 grid's size at lmax 8, 2000 times) %.1f GB/s\n",
+           mb, read_peak * 1e-9, mb / 4, triad_peak * 1e-9, l2_doubles * sizeof(double) / 1024.0, l2_peak * 1e-9);
+    printf("Read bandwidth is ordinary memory's (malloc).  Not the reference: the same read from a 2 MiB-aligned array\n"
+           "advised as huge pages (%s; %.0f MB of this process in huge pages then): %.1f GB/s\n",
+           hp_advised ? "madvise MADV_HUGEPAGE taken" : "no huge-page advice here", huge_mb, huge_read * 1e-9);
     if (csv) {
-        fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw\n");
-        fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f\n", read_peak * 1e-9, triad_peak * 1e-9);
+        fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw,"
+                     "ns_no_lookahead,of_read_bw_no_lookahead\n");
+        fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f,,\n", read_peak * 1e-9, triad_peak * 1e-9);
+        fprintf(csv, "bandwidth_l2,,,,,,,,,,%.3f,,,\n", l2_peak * 1e-9);
+        fprintf(csv, "bandwidth_huge_pages,,,,,,,,,,%.3f,,,\n", huge_read * 1e-9);
     }
 
     const char *mname[3] = {"trilinear", "Taylor", "Hermite"};
-    double hermite8[2] = {0, 0}; /* SIMD s/vertex, lmax 8: L2, DRAM */
-    const int lmaxes[3] = {0, 4, 8};
+    double hermite8[2] = {0, 0}, grid_huge_mb = -1.0; /* SIMD s/vertex, lmax 8: L2, DRAM; huge pages, lmax 8 DRAM grids */
+    const int lmaxes[3] = {0, 4, 8}, lfirst = quick ? 2 : 0;
     printf("\n## Interpolation, one core: SIMD kernel (%s) vs scalar reference\n\n", isa);
     printf("Chunks of %d vertices per call (the output, %d x 3 nc doubles, stays in cache).  L2: 4^3-node grid;\n"
            "DRAM: %d^3 / %d^3 / %d^3 nodes at lmax 0 / 4 / 8 (about %.0f MB at lmax 4-8), vertices in random order.\n"
-           "bytes/vertex: grid data read (8 corners); GB/s = bytes/vertex x vertices/s; of read: / read bandwidth above.\n\n",
+           "bytes/vertex: grid data read (8 corners); GB/s = bytes/vertex x vertices/s; of read BW: / the read bandwidth\n"
+           "above (DRAM rows: DRAM read; L2 rows: L2 read).  No look-ahead: the SIMD kernel in calls of one vertex (no\n"
+           "next vertex to request or set up: the order before the look-ahead), which adds the per-call argument checks;\n"
+           "grids of at most 1 MiB (the L2 rows) make no requests, only the next vertex's set-up overlaps.\n\n",
            CHUNK, CHUNK, out_of_cache_res(0), out_of_cache_res(4), out_of_cache_res(8), (double)out_of_cache_bytes() / (1 << 20));
-    printf("| lmax | method | grid | reference ns/vertex | SIMD ns/vertex | speed-up | SIMD Mvertices/s | bytes/vertex | GB/s | of read BW |\n");
-    printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    printf("| lmax | method | grid | reference ns/vertex | SIMD ns/vertex | speed-up | SIMD Mvertices/s | bytes/vertex | GB/s | of read BW "
+           "| no look-ahead ns/vertex | of read BW | look-ahead speed-up |\n");
+    printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     double *out = xmalloc(sizeof(double) * CHUNK * 3 * SHL_NCOEFFS(8) * 64);
-    for (int li = 0; li < 3; ++li) {
+    for (int li = lfirst; li < 3; ++li) {
         const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
         shl_ctx *ctx, *ctx_ref;
         must(shl_ctx_create(lmax, &ctx), "ctx");
@@ -265,34 +389,40 @@ int main(int argc, char **argv)
             bench_progress("interpolation, lmax %d, %s grid: filling 2 x %d^3 nodes (step 3/5)...", lmax,
                            big ? "out-of-cache" : "L2", res);
             shl_grid *g = make_grid(ctx, res), *gr = make_grid(ctx_ref, res);
+            if (big && lmax == 8) grid_huge_mb = anon_huge_mb();
             for (int m = 0; m < 3; ++m) {
                 /* L2: the same chunk again and again; DRAM: fresh vertices every chunk */
                 bench_progress("interpolation, lmax %d, %s grid: timing %s (step 3/5)...", lmax, big ? "out-of-cache" : "L2",
                                mname[m]);
-                job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out}, jr = js;
+                job js = {g, m, 1, CHUNK, big ? NPTS : CHUNK, pts, out, 0}, jr = js, j1 = js;
                 jr.g = gr;
+                j1.chunk = 1; /* no look-ahead */
                 const long reps = big ? 1 : (lmax == 0 ? 400 : lmax == 4 ? 100 : 40);
-                double ts[ROUNDS], tr[ROUNDS], sp[ROUNDS];
+                double ts[MAX_ROUNDS], tr[MAX_ROUNDS], t1[MAX_ROUNDS], sp[MAX_ROUNDS], sp1[MAX_ROUNDS];
                 run(&js);
                 run(&jr);
-                for (int r = 0; r < ROUNDS; ++r) {
-                    ts[r] = tr[r] = 0.0;
+                run(&j1);
+                for (int r = 0; r < rounds; ++r) {
+                    ts[r] = tr[r] = t1[r] = 0.0;
                     for (long q = 0; q < reps; ++q) {
                         ts[r] += run(&js) / reps;
                         tr[r] += run(&jr) / reps;
+                        t1[r] += run(&j1) / reps;
                     }
                     sp[r] = tr[r] / ts[r];
+                    sp1[r] = t1[r] / ts[r];
                 }
-                const double ms = bench_median(ts, ROUNDS), mr = bench_median(tr, ROUNDS), msp = bench_median(sp, ROUNDS);
-                const double bpv = bytes_per_vertex(m, nc), gbs = bpv / ms;
+                const double ms = bench_median(ts, rounds), mr = bench_median(tr, rounds), msp = bench_median(sp, rounds);
+                const double m1 = bench_median(t1, rounds), msp1 = bench_median(sp1, rounds);
+                const double bpv = bytes_per_vertex(m, nc), gbs = bpv / ms, peak = big ? read_peak : l2_peak;
                 if (lmax == 8 && m == SHL_INTERP_HERMITE) hermite8[big] = ms;
-                char share[32] = "-"; /* a share of DRAM bandwidth means nothing for an L2-resident grid */
-                if (big) snprintf(share, sizeof share, "**%.0f%%**", 100.0 * gbs / read_peak);
-                printf("| %d | %s | %s | %.1f | %.1f | **%.2fx** | %.2f | %.0f | %.1f | %s |\n", lmax, mname[m],
-                       big ? "DRAM" : "L2", mr * 1e9, ms * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, share);
+                printf("| %d | %s | %s | %.1f | %.1f | **%.2fx** | %.2f | %.0f | %.1f | **%.0f%%** | %.1f | %.0f%% | **%.2fx** |\n", lmax,
+                       mname[m], big ? "DRAM" : "L2", mr * 1e9, ms * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, 100.0 * gbs / peak,
+                       m1 * 1e9, 100.0 * bpv / m1 / peak, msp1);
                 if (csv)
-                    fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f\n", lmax, mname[m], big ? "dram" : "l2",
-                            isa, ms * 1e9, mr * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, gbs / read_peak);
+                    fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f,%.2f,%.3f\n", lmax, mname[m],
+                            big ? "dram" : "l2", isa, ms * 1e9, mr * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, gbs / peak, m1 * 1e9,
+                            bpv / m1 / peak);
             }
             shl_grid_destroy(g);
             shl_grid_destroy(gr);
@@ -301,35 +431,72 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx_ref);
     }
 
+    printf("\nThe two lmax-8 out-of-cache grids (shl_grid_create: library allocation): %.0f MB of this process in huge pages.\n",
+           grid_huge_mb);
+
+    /* The vertex order is the caller's: the library keeps it (results in the caller's order) */
+    {
+        const int res = out_of_cache_res(8);
+        printf("\n## Vertex order, Hermite, lmax 8, out-of-cache grid (%d^3 nodes): random vs sorted by cell\n\n"
+               "The same %d vertices, in random order and sorted by cell (x fastest), in calls of %d.  Sorted, neighbouring\n"
+               "vertices share corner rows and sweep the grid in address order, so the caches and the hardware\n"
+               "prefetchers serve part of the nominal bytes/vertex: the share of read bandwidth is nominal.\n\n",
+               res, NPTS, CHUNK);
+        printf("| order | ns/vertex | nominal GB/s | of read BW | sorted / random speed-up |\n|---|---|---|---|---|\n");
+        shl_ctx *ctx;
+        must(shl_ctx_create(8, &ctx), "ctx");
+        bench_progress("vertex order, lmax 8, out-of-cache grid: filling %d^3 nodes (step 4/5)...", res);
+        shl_grid *g = make_grid(ctx, res);
+        double *spts = sorted_by_cell(pts, NPTS, res);
+        job jrand = {g, SHL_INTERP_HERMITE, 1, CHUNK, NPTS, pts, out, 0}, jsort = jrand;
+        jsort.pts = spts;
+        double tr[MAX_ROUNDS], ts[MAX_ROUNDS], sp[MAX_ROUNDS];
+        run(&jrand);
+        run(&jsort);
+        for (int r = 0; r < rounds; ++r) {
+            tr[r] = run(&jrand);
+            ts[r] = run(&jsort);
+            sp[r] = tr[r] / ts[r];
+        }
+        const double mr = bench_median(tr, rounds), ms = bench_median(ts, rounds), bpv = bytes_per_vertex(SHL_INTERP_HERMITE, 81);
+        printf("| random | %.1f | %.1f | %.0f%% | |\n", mr * 1e9, bpv / mr * 1e-9, 100.0 * bpv / mr / read_peak);
+        printf("| sorted by cell | %.1f | %.1f | %.0f%% | **%.2fx** |\n", ms * 1e9, bpv / ms * 1e-9, 100.0 * bpv / ms / read_peak,
+               bench_median(sp, rounds));
+        if (csv) fprintf(csv, "order,8,Hermite,dram,%s,%.2f,%.2f,%.3f,,%.0f,,,,\n", isa, ms * 1e9, mr * 1e9, bench_median(sp, rounds), bpv);
+        free(spts);
+        shl_grid_destroy(g);
+        shl_ctx_destroy(ctx);
+    }
+
     printf("\n## Hermite interpolation, 2 threads vs 1 (SIMD kernel; calls of 8192 vertices, outputs not reused)\n\n");
     printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up |\n|---|---|---|---|---|\n");
     double *big_out = xmalloc(sizeof(double) * 8192 * 3 * SHL_NCOEFFS(8));
-    for (int li = 1; li < 3; ++li) {
+    for (int li = quick ? 2 : 1; li < 3; ++li) {
         const int lmax = lmaxes[li];
         shl_ctx *ctx;
         must(shl_ctx_create(lmax, &ctx), "ctx");
         for (int big = 0; big <= 1; ++big) {
             bench_progress("2 threads vs 1, lmax %d, %s grid (step 4/5)...", lmax, big ? "out-of-cache" : "L2");
             shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
-            job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out}, j2 = j1;
+            job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out, 1}, j2 = j1;
             j2.nthreads = 2;
-            double t1[ROUNDS], t2[ROUNDS], sp[ROUNDS];
+            double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS];
             run(&j1);
             run(&j2);
-            for (int r = 0; r < ROUNDS; ++r) {
+            for (int r = 0; r < rounds; ++r) {
                 t1[r] = run(&j1);
                 t2[r] = run(&j2);
                 sp[r] = t1[r] / t2[r];
             }
-            const double m1 = bench_median(t1, ROUNDS), m2 = bench_median(t2, ROUNDS), msp = bench_median(sp, ROUNDS);
+            const double m1 = bench_median(t1, rounds), m2 = bench_median(t2, rounds), msp = bench_median(sp, rounds);
             printf("| %d | %s | %.1f | %.1f | **%.2fx** |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp);
-            if (csv) fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp);
+            if (csv) fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,,,\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp);
             shl_grid_destroy(g);
         }
         shl_ctx_destroy(ctx);
     }
-    printf("\nMedians over %d rounds; in each round both variants are timed under the same load and the\n"
-           "speed-ups are ratios within the round.\n", ROUNDS);
+    printf("\nMedians over %d rounds; in each round all variants are timed under the same load and the\n"
+           "speed-ups are ratios within the round.\n", rounds);
 
     /* The papers' GPU throughput, implied by their frame and stage times (constants below),
      * next to this run's per-core rates: different hardware, different work per frame. */
@@ -352,9 +519,9 @@ int main(int argc, char **argv)
     printf("| Hermite interpolation per vertex | RTX 2080 Ti, Wu 2020 Table 1 (Dragon & Bunny ~640K vertices in 6.6 ms; Asian Dragon ~710K in 8.1 ms) | %.0f, %.0f | shl_grid_interp Hermite, float grid, %s: L2-resident / DRAM random | %.2f / %.2f |\n",
            wu_interp * 1e-6, wu_interp2 * 1e-6, isa, 1e-6 / hermite8[0], 1e-6 / hermite8[1]);
     if (csv) {
-        fprintf(csv, "papers,8,polygon,wang2018_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wang * 1e-6, 1e-6 / quad8);
-        fprintf(csv, "papers,8,polygon_grad,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wu_grid * 1e-6, 1e-6 / tri8g);
-        fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
+        fprintf(csv, "papers,8,polygon,wang2018_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wang * 1e-6, 1e-6 / quad8);
+        fprintf(csv, "papers,8,polygon_grad,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wu_grid * 1e-6, 1e-6 / tri8g);
+        fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
     }
     printf("\n(checksum %g)\n", (double)bench_sink);
     if (fclose(csv)) return 1;

@@ -187,7 +187,7 @@ typedef struct {
     int failed;
 } job;
 
-static void per_vertex_range(void *arg, long begin, long end, int worker)
+static void per_vertex_range(void *arg, int worker, long begin, long end)
 {
     job *j = arg;
     const size_t nc3 = 3 * (size_t)SHL_NCOEFFS(shl_ctx_lmax(j->ctx));

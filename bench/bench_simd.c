@@ -6,13 +6,18 @@
  *  - spherical light: shl_sphere_batch_f vs shl_sphere / shl_sphere_grad (and the same kernel
  *    compiled scalar, and shl_sphere_f), lmax 2..14,
  *  - light set (8 triangles, 2 spheres): shl_lights_eval_batch_f vs shl_lights_eval (and the
- *    same kernels compiled scalar, and shl_lights_eval_batch_f one point per call), lmax 2..14.
+ *    same kernels compiled scalar, and shl_lights_eval_batch_f one point per call), lmax 2..14,
+ *  - ISA comparison at lmax 8: every ISA of simd/isa_list.h this CPU runs (shl_ctx_create_isa)
+ *    on the polygon, sphere, light-set and interpolation batches, time ratios to avx2 (or the
+ *    first vector ISA) within each round, the polygon batch as a share of the peak of its own
+ *    vector width (the 512-bit FMA peak for avx512, measured in the same rounds).
  * All ratios come from one run.  CSV: build/bench/bench_simd.csv (-o overrides); --help. */
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #elif defined(__aarch64__)
@@ -28,6 +33,10 @@ typedef struct {
     float vf[3 * NV], pf[3 * NPTS], *out, *grad;
     double vd[3 * NV], pd[3 * NPTS], *outd, *gradd;
     const shl_lights *set; /* light-set variants */
+    const shl_grid *grid;  /* interpolation: method, IP_CHUNK points ip_pts, outputs ip_out */
+    int method;
+    const double *ip_pts;
+    double *ip_out;
     long inner; /* evaluations per timed call */
 } job;
 
@@ -119,6 +128,16 @@ static void run_lights_one_point(void *p)
     bench_sink += j->out[1];
 }
 
+/* Grid interpolation (shl_grid_interp, one thread) of IP_CHUNK points per call. */
+enum { IP_CHUNK = 128 };
+static void run_interp(void *p)
+{
+    job *j = p;
+    for (long done = 0; done < j->inner; done += IP_CHUNK)
+        shl_grid_interp(j->grid, j->method, 2.0, IP_CHUNK, j->ip_pts, j->ip_out, 1);
+    bench_sink += j->ip_out[1];
+}
+
 /* 8 triangles (the bench triangle rotated about z by k pi/4 and lifted by k/8;
  * even k one-sided, facing the points, odd k two-sided) and 2 spheres. */
 enum { SET_POLYS = 8, SET_SPHERES = 2 };
@@ -159,6 +178,17 @@ static double once(void (*fn)(void *), job *j)
     const double t0 = bench_now();
     fn(j);
     return (bench_now() - t0) / (double)j->inner;
+}
+
+/* As once, in this thread's CPU time (CLOCK_THREAD_CPUTIME_ID): time spent
+ * descheduled on a loaded machine does not count (the ISA comparison). */
+static double once_cpu(void (*fn)(void *), job *j)
+{
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+    fn(j);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+    return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)j->inner;
 }
 
 /* Floating-point operations of one evaluation, counted from simd/poly_batch.h as
@@ -214,6 +244,27 @@ __attribute__((target("avx2,fma"))) static void fma_peak(void *p)
 }
 #define PEAK_ISA "avx2"
 #define PEAK_FLOPS_PER_ITER (FMA_CHAINS * 8 * 2)
+/* The same with 512-bit vectors (AVX-512F): 16 float lanes.  Called only when
+ * shl_ctx_create_isa accepts "avx512" (CPU and OS support checked there). */
+__attribute__((target("avx512f"))) static void fma_peak512(void *p)
+{
+    const job *j = p;
+    const __m512 m = _mm512_set1_ps(0.9999999f), c = _mm512_set1_ps(1e-7f);
+    const float s = (float)(j->inner & 7);
+#define INIT512(a) __m512 a = _mm512_set1_ps(s + (float)(#a)[1]);
+#define STEP512(a) a = _mm512_fmadd_ps(a, m, c);
+#define SUM512(a) t = _mm512_add_ps(t, a);
+    CHAINS(INIT512)
+    for (long i = 0; i < j->inner; ++i) {
+        CHAINS(STEP512)
+    }
+    __m512 t = _mm512_setzero_ps();
+    CHAINS(SUM512)
+    float out[16];
+    _mm512_storeu_ps(out, t);
+    bench_sink += out[0];
+}
+#define PEAK512_FLOPS_PER_ITER (FMA_CHAINS * 16 * 2)
 #elif defined(__aarch64__)
 static void fma_peak(void *p)
 {
@@ -234,6 +285,30 @@ static void fma_peak(void *p)
 #define PEAK_ISA "neon"
 #define PEAK_FLOPS_PER_ITER (FMA_CHAINS * 4 * 2)
 #endif
+
+/* The peak loop of an ISA's vector width and its flops per iteration: the
+ * 512-bit loop for avx512, else the loop above (avx2 or neon; scalar ISAs are
+ * measured against it too).  NULL where none is compiled. */
+typedef struct {
+    void (*fn)(void *);
+    double flops_per_iter;
+    const char *name;
+} peak_loop;
+
+static peak_loop peak_for(const char *isa)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    if (!strcmp(isa, "avx512")) return (peak_loop){fma_peak512, PEAK512_FLOPS_PER_ITER, "avx512"};
+#endif
+    (void)isa;
+#ifdef PEAK_ISA
+    return (peak_loop){fma_peak, PEAK_FLOPS_PER_ITER, PEAK_ISA};
+#else
+    return (peak_loop){NULL, 0.0, "none"};
+#endif
+}
+
+static peak_loop peak_loop_default; /* that of the default ISA, for the per-lmax tables */
 
 /* The four variants of one light kind: batch kernel (context's ISA, and the
  * same kernel with SHLIGHT_ISA=scalar), scalar double and float single-point loops. */
@@ -276,11 +351,7 @@ static timing time_variants(const variants *v, const job *base, int lmax, int wi
         speed[r] = td[r] / tb[r];
         rate[r] = flops / tb[r];
         pk[r] = 0.0;
-#ifdef PEAK_ISA
-        if (peak) pk[r] = (double)PEAK_FLOPS_PER_ITER / once(fma_peak, peak);
-#else
-        (void)peak;
-#endif
+        if (peak && peak_loop_default.fn) pk[r] = peak_loop_default.flops_per_iter / once(peak_loop_default.fn, peak);
         frac[r] = pk[r] > 0 ? rate[r] / pk[r] : 0.0;
     }
     shl_ctx_destroy(ctx);
@@ -291,20 +362,151 @@ static timing time_variants(const variants *v, const job *base, int lmax, int wi
     return t;
 }
 
+/* ---- ISA comparison at lmax 8: every ISA of simd/isa_list.h this CPU runs ---- */
+static const char *const isa_names[] = {
+#define SHL_ISA(name, flags, cpu) #name,
+#include "../simd/isa_list.h"
+#undef SHL_ISA
+};
+enum { NISA_LIST = sizeof isa_names / sizeof isa_names[0], CMP_LMAX = 8 };
+
+typedef struct {
+    const char *name;
+    void (*fn)(void *);
+    int with_grad, method, polygon; /* polygon: flops counted (kernel_flops) */
+    long granule;
+    int lmax1; /* interpolation from the lmax 1 grid (rows of 4 coefficients) */
+} cmp_kernel;
+
+/* Each kernel on each ISA, ROUNDS rounds timing every ISA once (calls of ~10 ms):
+ * time per point, the speed against the reference ISA (avx2, else the first
+ * vector ISA) as the median of within-round ratios, and for the polygon batch
+ * the share of the FMA peak of the ISA's own width measured in the same round. */
+static void isa_comparison(FILE *csv, const job *base, const shl_lights *set, const char *default_isa)
+{
+    enum { ROUNDS = 15 };
+    static double ip_pts[3 * IP_CHUNK], ip_out[3 * IP_CHUNK * SHL_NCOEFFS(CMP_LMAX)];
+    const double lo[3] = {-1.0, -1.0, -1.0}, hi[3] = {1.0, 1.0, 1.0};
+    const int res[3] = {4, 4, 4}; /* 64 nodes x 3888 bytes: L2-resident, as the outputs */
+    shl_ctx *ctx[NISA_LIST], *ctx1[NISA_LIST];
+    shl_grid *grid[NISA_LIST], *grid1[NISA_LIST];
+    const char *names[NISA_LIST];
+    int n = 0, ref = -1;
+    for (int i = 0; i < NISA_LIST; ++i) {
+        shl_ctx *c, *c1;
+        if (shl_ctx_create_isa(CMP_LMAX, isa_names[i], &c) != SHL_OK) continue; /* not run by this CPU */
+        shl_grid *g, *g1;
+        if (shl_ctx_create_isa(1, isa_names[i], &c1) != SHL_OK || shl_grid_create(c, lo, hi, res, SHL_GRID_FLOAT, &g) != SHL_OK ||
+            shl_grid_fill(g, set, 1) != SHL_OK || shl_grid_create(c1, lo, hi, res, SHL_GRID_FLOAT, &g1) != SHL_OK ||
+            shl_grid_fill(g1, set, 1) != SHL_OK) {
+            fprintf(stderr, "bench_simd: grid set-up failed\n");
+            exit(1);
+        }
+        if (!strcmp(isa_names[i], "avx2") || (ref < 0 && strcmp(isa_names[i], "scalar"))) ref = n;
+        names[n] = isa_names[i];
+        ctx[n] = c;
+        ctx1[n] = c1;
+        grid1[n] = g1;
+        grid[n++] = g;
+    }
+    if (ref < 0) ref = 0;
+    for (int k = 0; k < 3 * IP_CHUNK; ++k) ip_pts[k] = base->pd[k];
+    const cmp_kernel kernels[] = {
+        {"polygon batch", run_batch, 0, 0, 1, NPTS, 0},
+        {"polygon batch + grad", run_batch, 1, 0, 1, NPTS, 0},
+        {"sphere batch", run_sphere_batch, 0, 0, 0, NPTS, 0},
+        {"sphere batch + grad", run_sphere_batch, 1, 0, 0, NPTS, 0},
+        {"light set batch", run_lights_batch, 0, 0, 0, NPTS, 0},
+        {"light set batch + grad", run_lights_batch, 1, 0, 0, NPTS, 0},
+        {"interp trilinear", run_interp, 0, SHL_INTERP_TRILINEAR, 0, IP_CHUNK, 0},
+        {"interp Taylor", run_interp, 0, SHL_INTERP_TAYLOR, 0, IP_CHUNK, 0},
+        {"interp Hermite", run_interp, 0, SHL_INTERP_HERMITE, 0, IP_CHUNK, 0},
+        {"interp Hermite lmax 1", run_interp, 0, SHL_INTERP_HERMITE, 0, IP_CHUNK, 1},
+    };
+    const int nk = (int)(sizeof kernels / sizeof kernels[0]);
+    printf("\n## ISA comparison, lmax %d, one core (default ISA: %s; speed = time of %s / time of the ISA)\n\n",
+           CMP_LMAX, default_isa, names[ref]);
+    printf("Interpolation: shl_grid_interp of %d points per call from a %dx%dx%d float grid (L2-resident), one thread;\n"
+           "also at lmax 1, whose rows of 4 coefficients are shorter than 8 double lanes (avx512: the avx2 kernel).\n\n",
+           IP_CHUNK, res[0], res[1], res[2]);
+    printf("| kernel | ISA | ns per point | speed vs %s | GFLOP/s | own-width peak GFLOP/s | of peak |\n", names[ref]);
+    printf("|---|---|---|---|---|---|---|\n");
+    if (csv) fprintf(csv, "isa_cmp_kernel,lmax,isa,ns_batch,ref_isa,speed_vs_ref,flops,gflops,peak_gflops,peak_fraction,,\n");
+    for (int q = 0; q < nk; ++q) {
+        const cmp_kernel *K = &kernels[q];
+        bench_progress("ISA comparison: %s (%d/%d)...", K->name, q + 1, nk);
+        const double flops = K->polygon ? kernel_flops(CMP_LMAX, NV, K->with_grad) : 0.0;
+        job jb[NISA_LIST], jp = *base;
+        jp.inner = 1L << 16;
+        for (int i = 0; i < n; ++i) {
+            jb[i] = *base;
+            jb[i].ctx = ctx[i];
+            jb[i].grad = K->with_grad ? base->grad : NULL;
+            jb[i].grid = K->lmax1 ? grid1[i] : grid[i];
+            jb[i].method = K->method;
+            jb[i].ip_pts = ip_pts;
+            jb[i].ip_out = ip_out;
+            calibrate(K->fn, &jb[i], K->granule);
+        }
+        double t[NISA_LIST][ROUNDS], speed[NISA_LIST][ROUNDS], rate[NISA_LIST][ROUNDS], pk[NISA_LIST][ROUNDS],
+            frac[NISA_LIST][ROUNDS];
+        for (int r = 0; r < ROUNDS; ++r) {
+            for (int i = 0; i < n; ++i) {
+                t[i][r] = once_cpu(K->fn, &jb[i]);
+                const peak_loop pl = peak_for(names[i]);
+                pk[i][r] = K->polygon && pl.fn ? pl.flops_per_iter / once_cpu(pl.fn, &jp) : 0.0;
+            }
+            for (int i = 0; i < n; ++i) {
+                speed[i][r] = t[ref][r] / t[i][r];
+                rate[i][r] = flops / t[i][r];
+                frac[i][r] = pk[i][r] > 0.0 ? rate[i][r] / pk[i][r] : 0.0;
+            }
+        }
+        for (int i = 0; i < n; ++i) {
+            const double ns = 1e9 * bench_median(t[i], ROUNDS), sp = bench_median(speed[i], ROUNDS);
+            const double gf = 1e-9 * bench_median(rate[i], ROUNDS), pg = 1e-9 * bench_median(pk[i], ROUNDS);
+            const double fr = bench_median(frac[i], ROUNDS);
+            if (K->polygon)
+                printf("| %s | %s | %.1f | **%.2fx** | %.1f | %.1f | **%.0f%%** |\n", K->name, names[i], ns, sp, gf, pg,
+                       100.0 * fr);
+            else
+                printf("| %s | %s | %.1f | **%.2fx** | | | |\n", K->name, names[i], ns, sp);
+            if (csv)
+                fprintf(csv, "%s,%d,%s,%.2f,%s,%.3f,%.0f,%.2f,%.2f,%.3f,,\n", K->name, K->lmax1 ? 1 : CMP_LMAX, names[i], ns, names[ref], sp,
+                        flops, gf, pg, fr);
+        }
+    }
+    printf("\nMedians over %d rounds; in each round every ISA is timed once (calls of ~10 ms), in this\n"
+           "thread's CPU time (time descheduled on a loaded machine does not count), and the speed and the\n"
+           "share of peak are ratios within the round.  Peak: %d independent FMA chains of the ISA's vector\n"
+           "width (512-bit for avx512, 256-bit for avx2 and scalar on x86).\n",
+           ROUNDS, FMA_CHAINS);
+    for (int i = 0; i < n; ++i) {
+        shl_grid_destroy(grid[i]);
+        shl_grid_destroy(grid1[i]);
+        shl_ctx_destroy(ctx1[i]);
+        shl_ctx_destroy(ctx[i]);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const char *csv_path = "build/bench/bench_simd.csv";
-    const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_simd.csv)"}};
+    const char *isa_only = NULL;
+    const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_simd.csv)"},
+                              {"-i", "--isa-only", NULL, &isa_only, "only the ISA comparison at lmax 8 (~1 minute)"}};
     const bench_cli cli = {
         "bench_simd", "[-o FILE]",
         "Batched SIMD kernels, one core, lmax 2..14, with and without gradients: shl_polygon_batch_f\n"
         "(triangle light) against the scalar double loop, the same kernel compiled scalar\n"
         "(SHLIGHT_ISA=scalar) and the scalar float path, with counted flops against this core's measured\n"
         "FMA peak; shl_sphere_batch_f likewise; a light set (8 triangles, 2 spheres, RGB) through\n"
-        "shl_lights_eval_batch_f against shl_lights_eval.  About 1-1.5 minutes on a 2-core machine (more\n"
-        "under load); progress on stderr.\n"
+        "shl_lights_eval_batch_f against shl_lights_eval; then every ISA this CPU runs at lmax 8 on the\n"
+        "polygon, sphere, light-set and interpolation batches, as speed ratios to avx2 within each round\n"
+        "(and the polygon batch's share of the FMA peak of its own vector width: 512-bit for avx512).\n"
+        "About 2-2.5 minutes on a 2-core machine (more under load); progress on stderr.\n"
         "Writes Markdown tables to stdout and one CSV row per table row to the CSV file.",
-        opts, 1, 0};
+        opts, 2, 0};
     bench_parse(&cli, argc, argv, NULL);
     FILE *csv = bench_create(csv_path, "w");
     if (!csv) return 1;
@@ -331,14 +533,16 @@ int main(int argc, char **argv)
 
     job jp = j; /* the peak microbenchmark: 2^16 iterations of FMA_CHAINS FMAs per call */
     jp.inner = 1L << 16;
-#ifdef PEAK_ISA
-    printf("peak: %d independent %s FMA chains in registers, measured in every round\n", FMA_CHAINS, PEAK_ISA);
-#endif
+    peak_loop_default = peak_for(isa);
+    if (peak_loop_default.fn)
+        printf("peak: %d independent %s FMA chains in registers, measured in every round\n", FMA_CHAINS,
+               peak_loop_default.name);
     const variants polygon = {run_batch, run_scalar_double, run_scalar_float};
     const variants sphere = {run_sphere_batch, run_sphere_double, run_sphere_float};
-    if (csv) fprintf(csv, "grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,flops,gflops,peak_gflops,peak_fraction\n");
+    const int full = !isa_only; /* the per-lmax tables; --isa-only: the ISA comparison alone */
+    if (csv && full) fprintf(csv, "grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,flops,gflops,peak_gflops,peak_fraction\n");
 
-    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+    for (int with_grad = 0; full && with_grad <= 1; ++with_grad) {
         printf("\n## %s, triangle light, one core (%d points per batch call; time per point)\n\n",
                with_grad ? "Coefficients and gradients (shl_polygon_grad)" : "Coefficients (shl_polygon)", NPTS);
         printf("| lmax | scalar double ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | scalar float ns | flops/eval "
@@ -357,13 +561,14 @@ int main(int argc, char **argv)
                         t.peak_gflops, t.peak_fraction);
         }
     }
-    printf("\nMedians over 15 rounds; in each round every variant is timed once (calls of ~10 ms) and\n"
+    if (full)
+        printf("\nMedians over 15 rounds; in each round every variant is timed once (calls of ~10 ms) and\n"
            "the speed-up and the fraction of peak are ratios within the round.\n"
            "flops/eval: counted from simd/poly_batch.h (kernel_flops in this file).\n");
 
     /* spherical light: shl_sphere_batch_f vs the single-point loops */
-    if (csv) fprintf(csv, "sphere_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,,,,\n");
-    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+    if (csv && full) fprintf(csv, "sphere_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_scalar_float,,,,\n");
+    for (int with_grad = 0; full && with_grad <= 1; ++with_grad) {
         printf("\n## Sphere %s (radius 0.5 at distance ~3), one core (%d points per batch call; time per point)\n\n",
                with_grad ? "coefficients and gradients (shl_sphere_grad)" : "coefficients (shl_sphere)", NPTS);
         printf("| lmax | scalar double ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | scalar float ns |\n", isa);
@@ -378,14 +583,14 @@ int main(int argc, char **argv)
                         t.scalar_double * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9);
         }
     }
-    printf("\nSphere: medians over 15 rounds, speed-ups within each round, as above.\n");
+    if (full) printf("\nSphere: medians over 15 rounds, speed-ups within each round, as above.\n");
 
     /* light set: shl_lights_eval_batch_f vs the double single-point shl_lights_eval */
     shl_lights *set = make_light_set(j.vd);
     j.set = set;
     const variants lights = {run_lights_batch, run_lights_double, run_lights_one_point};
-    if (csv) fprintf(csv, "lights_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_batch_one_point,,,,\n");
-    for (int with_grad = 0; with_grad <= 1; ++with_grad) {
+    if (csv && full) fprintf(csv, "lights_grad,lmax,isa,ns_batch,ns_scalar_double,speedup,ns_batch_scalar_isa,ns_batch_one_point,,,,\n");
+    for (int with_grad = 0; full && with_grad <= 1; ++with_grad) {
         printf("\n## Light set (%d triangles, %d spheres, RGB) %s, one core (%d points per batch call; time per point)\n\n",
                SET_POLYS, SET_SPHERES, with_grad ? "coefficients and gradients" : "coefficients", NPTS);
         printf("| lmax | shl_lights_eval (double) ns | batch ns (%s) | speed-up | batch ns (scalar ISA) | batch, 1 point per "
@@ -401,7 +606,9 @@ int main(int argc, char **argv)
                         t.scalar_double * 1e9, t.speedup, t.batch_scalar_isa * 1e9, t.scalar_float * 1e9);
         }
     }
-    printf("\nLight set: medians over 15 rounds, speed-ups within each round, as above.\n");
+    if (full) printf("\nLight set: medians over 15 rounds, speed-ups within each round, as above.\n");
+    j.grad = grad;
+    isa_comparison(csv, &j, set, isa);
     shl_lights_destroy(set);
     shl_ctx_destroy(probe);
     printf("(checksum %g)\n", (double)bench_sink);

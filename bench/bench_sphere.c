@@ -485,6 +485,7 @@ static void compare_section(FILE *csv)
     printf("| lmax | shl_sphere ns | plain ns | plain / shl_sphere (range) | max|diff| / max|coeff| | "
            "shl__sh_eval ns | former ns | former / new (range) | max|diff| | shl_eval_basis ns |\n");
     printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    double target_ratio[NCMP];
     for (int i = 0; i < NCMP; ++i) {
         double med[NKIND], rs[NROUND], rb[NROUND], rs_lo = 1e30, rs_hi = 0.0, rb_lo = 1e30, rb_hi = 0.0;
         for (int r = 0; r < NROUND; ++r) {
@@ -494,6 +495,7 @@ static void compare_section(FILE *csv)
         }
         for (int k = 0; k < NKIND; ++k) med[k] = bench_median(t[k][i], NROUND);
         const double ratio = med[K_PLAIN] / med[K_SHL], ratio_b = med[K_FORMER] / med[K_BASIS];
+        target_ratio[i] = ratio;
         printf("| %d | %.0f | %.0f | %.2f (%.2f-%.2f) | %.1e | %.0f | %.0f | %.2f (%.2f-%.2f) | %.1e | %.0f |\n",
                lmaxs[i], med[K_SHL] * 1e9, med[K_PLAIN] * 1e9, ratio, rs_lo, rs_hi, agree[i], med[K_BASIS] * 1e9,
                med[K_FORMER] * 1e9, ratio_b, rb_lo, rb_hi, agree_basis[i], med[K_EVAL] * 1e9);
@@ -523,6 +525,13 @@ static void compare_section(FILE *csv)
     for (int i = 0; i < NCMP; ++i) worst = fmax(worst, agree[i]);
     printf("\nAgreement with the plain implementation: max|diff| / max|coeff| %.1e (%s 1e-12).\n", worst,
            worst <= 1e-12 ? "within" : "NOT within");
+    /* issue 16: >= 1.5x the plain implementation at lmax 9, 14, 30, not slower at 2 and 5 */
+    printf("\nIssue 16 targets, plain / shl_sphere (median of the rounds above):");
+    for (int i = 0; i < NCMP; ++i) {
+        const double goal = lmaxs[i] >= 9 ? 1.5 : 1.0;
+        printf(" lmax %d %.2f (>= %.1f: %s)%s", lmaxs[i], target_ratio[i], goal, target_ratio[i] >= goal ? "met" : "MISSED",
+               i + 1 < NCMP ? ";" : ".\n");
+    }
 }
 
 /* Float stand-in for DirectXSH's XMSHEvalSphericalLight (float, lmax <= 5: closed-form
@@ -648,12 +657,17 @@ static void compare_float_section(FILE *csv)
            "compile-time constant (constants folded, loops unrolled), no argument checks.\n\n");
     printf("| lmax | shl_sphere_f ns | closed form ns | closed / shl_sphere_f | max|diff| / max|coeff| |\n");
     printf("|---|---|---|---|---|\n");
+    double target_f[2];
     for (int i = 0; i < 2; ++i) {
         const double ms = bench_median(t[0][i], NROUND), mc = bench_median(t[1][i], NROUND);
         printf("| %d | %.0f | %.0f | %.2f | %.1e |\n", lmaxs[i], ms * 1e9, mc * 1e9, mc / ms, agree[i]);
+        target_f[i] = mc / ms;
         if (csv) fprintf(csv, "compare_f,%d,,,,,,,,,,,,%.1f,,%.1f,%.3f,%.1e,,,,\n", lmaxs[i] + 1, ms * 1e9, mc * 1e9, mc / ms, agree[i]);
         shl_ctx_destroy(ctx[i]);
     }
+    /* issue 16: shl_sphere_f not slower per call than the closed form at lmax 2 and 5 */
+    printf("\nIssue 16 target, closed form / shl_sphere_f (median): lmax 2 %.2f (>= 1.0: %s); lmax 5 %.2f (>= 1.0: %s).\n",
+           target_f[0], target_f[0] >= 1.0 ? "met" : "MISSED", target_f[1], target_f[1] >= 1.0 ? "met" : "MISSED");
 }
 
 static long count_ops(int which, int lmax)

@@ -70,7 +70,7 @@ typedef struct shl_ctx shl_ctx;
  *  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create(int lmax, shl_ctx **out);
 /** As shl_ctx_create, with the batch kernels of the instruction set named isa
- *  ("scalar", "avx2", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
+ *  ("scalar", "avx2", "avx512", "neon": see shl_ctx_isa), whatever SHLIGHT_ISA says.
  *  isa NULL: SHL_ENULL; not compiled in or not supported by this CPU and OS:
  *  SHL_EDOMAIN ("scalar" always succeeds).  On failure *out = NULL (if out != NULL). */
 int shl_ctx_create_isa(int lmax, const char *isa, shl_ctx **out);
@@ -312,6 +312,110 @@ int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts,
 int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
                             double *rgb, int nthreads, int *nclamped);
 
+/* ---- adaptive multi-level SH grids (beyond Wu 2020 Sec. 7.3; issue 19) ---- */
+/**
+ * An adaptive grid over the box [lo, hi]: a coarse uniform grid of res[0] x res[1]
+ * x res[2] nodes (level 0, as shl_grid) and finer levels l = 1, 2, ... (spacing
+ * h_0 / 2^l) where an a-posteriori error estimate exceeds a tolerance; float nodes
+ * (coefficients and gradients, layouts of shl_lights_eval) filled through the float
+ * SIMD light-set batch; interpolated with Wu 2020 Alg. 4 (tricubic Hermite) per level.
+ *
+ * Refinement (shl_agrid_fill): every cell of level l gets the estimate
+ *   e = max over its two samples s = lo + (c + q) h_l, q = (1/4, 1/4, 1/4) and (3/4, 3/4, 3/4),
+ *       and over the colours, of || A(s) - L(s) ||_2 over the nc coefficients,
+ * A the adaptive interpolant built so far and L the light set by the float batch
+ * (|| ||_2 of an SH vector is the L2 norm of its function on the sphere).  The two
+ * samples are points of no symmetry of the cell: the leading error term of Alg. 4 is
+ * odd in some axes (the gradients carried linearly) and vanishes at the centre and
+ * at every node of level l + 1.  The criterion compares with tol either e
+ * (SHL_AGRID_MAX: a pointwise target) or e 8^-l, the estimate times the cell's
+ * volume in coarse-cell units (SHL_AGRID_MEAN: equal shares of the mean error, as
+ * an image's mean absolute error weighs it; near a discontinuity, such as a
+ * two-sided light in the box, e stays ~|L| at every level and MAX refines to the
+ * budget or the finest level, MEAN to about log_8(|L| / tol) levels).  Cells whose
+ * criterion value exceeds tol are refined, largest first, while the total node
+ * count stays <= max_nodes (ring included, below); the refinement is breadth-first
+ * (level by level), so a tight budget goes to the coarser levels first.  A level
+ * from which no refinement can follow (the budget was hit, or the finest level
+ * allowed) is not estimated.
+ * An a-posteriori estimate is a measurement at two points per cell, not a bound:
+ * the error elsewhere in a cell may exceed it (tests/test_agrid.c measures the
+ * ratio at random points), and a feature smaller than a cell (a light's edge, a
+ * small sphere) can fall between the samples of every cell of a level.
+ *
+ * Continuity: the interpolant is C0 everywhere in the box (to rounding).  Level l
+ * alone, I_l, is Alg. 4 on its cells, C0 across their faces (on a face it depends
+ * only on the face's 4 nodes).  The levels are blended as
+ *   A_0 = I_0,   A_l = w_l I_l + (1 - w_l) A_{l-1},
+ * w_l the trilinear interpolant on the level-l lattice of 1 at the level-l nodes in
+ * (or on) refined level-(l-1) cells and 0 at the others: continuous, 1 on the
+ * refined cells, 0 on the boundary of level l's cells (which are the refined cells'
+ * children and a ring of one level-l cell around them).  So A is C0 but not C1
+ * across the ring, where it is a convex blend of two levels (its error there is at
+ * most the larger of theirs).  A point with w_l = 1 at its finest level costs one
+ * Alg. 4 evaluation; in a ring, one per level blended.
+ */
+typedef struct shl_agrid shl_agrid;
+
+/** Largest number of levels (level 0 included). */
+#define SHL_AGRID_LEVELS_MAX 8
+#define SHL_AGRID_MAX  0 /* refinement criterion: estimate e > tol */
+#define SHL_AGRID_MEAN 1 /* refinement criterion: e 8^-l > tol on level l */
+
+/** State of an adaptive grid (shl_agrid_get_stats). */
+typedef struct {
+    long nodes;          /* nodes over all levels (<= max_nodes) */
+    long cells;          /* cells over all levels */
+    long long bytes;     /* memory held: node data, cell records, hash tables */
+    int levels;          /* levels built, 1 = the coarse grid only */
+    long samples;        /* estimate samples of the last fill (2 per cell estimated) */
+    long unresolved;     /* cells estimated > tol and left unrefined; -1: unknown, the last
+                            level was not estimated (budget hit or finest level); 0: every
+                            sample of the last fill within tol */
+    double max_estimate; /* largest criterion value (e or e 8^-l) of an estimated cell left unrefined
+                            (0 before any fill) */
+    int budget_hit;      /* 1 if the node budget stopped a refinement */
+} shl_agrid_stats;
+
+/**
+ * Create an adaptive grid for bands 0..shl_ctx_lmax(ctx), level 0 zero-filled.
+ * lo, hi, res as shl_grid_create (else SHL_EDOMAIN, SHL_ENONFINITE); criterion
+ * SHL_AGRID_MAX or SHL_AGRID_MEAN (else SHL_EDOMAIN); tol finite
+ * (SHL_ENONFINITE) and > 0 (SHL_EDOMAIN), in the units of the coefficients (see the
+ * estimate above); max_nodes >= res[0] res[1] res[2] and <= 2^31 - 1 (SHL_EDOMAIN).
+ * The box must allow the float fill of shl_grid_fill on level 0 (every axis
+ * max(|lo[a]|, |hi[a]|) <= 2^126, h[a] >= 2^-10 max(|lo[a]|, |hi[a]|) and
+ * >= 2^-100; else SHL_EDOMAIN); finer levels are used while their spacing still
+ * does, up to SHL_AGRID_LEVELS_MAX.  On failure *out = NULL (if out != NULL).
+ */
+int shl_agrid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3], int criterion,
+                     double tol, long max_nodes, shl_agrid **out);
+/** Destroy an adaptive grid (NULL is accepted and ignored). */
+void shl_agrid_destroy(shl_agrid *grid);
+/**
+ * Rebuild the grid from the light set: level 0's nodes, then level by level the
+ * estimate, the refinement and the new level's nodes (each node, bit for bit,
+ * shl_lights_eval_batch_f at its position rounded to float, as in shl_grid_fill),
+ * on 1 <= nthreads <= SHL_MAX_THREADS threads (else SHL_EDOMAIN); the result does
+ * not depend on nthreads, bit for bit.  Errors (SHL_ENULL, SHL_ENOMEM, SHL_ETHREAD)
+ * leave the grid unchanged.  Cost: one light-set evaluation with gradients per node
+ * and two without per cell estimated.
+ */
+int shl_agrid_fill(shl_agrid *grid, const shl_lights *lights, int nthreads);
+/**
+ * The adaptive interpolant A (above) at npts >= 0 points pts[3*p .. 3*p+2] into
+ * rgb + 3*nc*p (layout of shl_lights_eval); points outside the box are clamped to
+ * it as in shl_grid_interp.  One point: npts = 1, nthreads = 1 (no thread, no
+ * allocation).  Sums in double over float nodes, with the context's interpolation
+ * kernel (shl_grid_interp).  Errors before anything is written: NULL pointers
+ * (SHL_ENULL; pts and rgb may be NULL when npts = 0), npts < 0 or nthreads outside
+ * 1..SHL_MAX_THREADS (SHL_EDOMAIN), a non-finite point (SHL_ENONFINITE);
+ * SHL_ETHREAD as shl_grid_interp.  Results do not depend on nthreads.  Reads only.
+ */
+int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double *rgb, int nthreads);
+/** Node count, bytes, levels and the last fill's estimate summary (shl_agrid_stats). */
+int shl_agrid_get_stats(const shl_agrid *grid, shl_agrid_stats *stats);
+
 /* ---- spherical lights (Mezieres et al. 2022, "HVL", Sec. 4.2) ---------- */
 /**
  * SH projection of a uniform, unit-radiance sphere seen from x:
@@ -340,6 +444,39 @@ int shl_sphere_grad(const shl_ctx *ctx, const double x[3], const double center[3
                     double *coeffs, double *grad);
 int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
                       float *coeffs, float *grad);
+
+/* ---- second derivatives (Hessians) -------------------------------------- */
+/**
+ * Coefficients, gradient (layouts of shl_polygon_grad / shl_sphere_grad) and the six
+ * second derivatives hess[i*nc + k] = d^2 coeffs[k] / dx_a dx_b, i = 0..5 for
+ * (a,b) = xx, xy, xz, yy, yz, zz (hess has 6*nc entries), derived analytically:
+ * the polygon's boundary formulation (Wu et al. 2020 gradients) extended one order,
+ * the sphere's cap w_l(cos a) Y_lm(axis) differentiated twice through its lobe
+ * integrals (derivation in README, "Hessians").  Same validation and statuses as
+ * the gradient functions (all pointers required); nothing is written on error.
+ * Polygon: the Hessian grows like 1/distance^2 near an edge (rounding error ~eps times
+ * that growth, as the gradient's); in the polygon's plane coeffs, grad and hess are 0 (not
+ * differentiable there); near the plane the Hessian is taken from the boundary sums (error
+ * ~eps dmin / height of its scale) while the coefficients use shl_polygon's planar rule;
+ * edges seen nearly end-on (x much closer to an edge's line than to the edge) take their
+ * new edge integrals from a Gauss rule on the arc, so no (distance ratio)^2 loss there.
+ * Sphere: analytic outside, growing like (|center - x| - radius)^(-3/2) towards the
+ * surface; inside or on it the coefficients are constant and grad, hess are 0.
+ */
+int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n,
+                     double *coeffs, double *grad, double *hess);
+int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                    double *coeffs, double *grad, double *hess);
+/**
+ * shl_lights_eval with second derivatives: rgb and grad as there (grad required here),
+ *   hess[(c*6 + i)*nc + k] = d^2 rgb[c*nc + k] / dx_a dx_b,  i as in shl_polygon_hess  (18*nc entries).
+ * Each light adds rgb_c times its shl_polygon_hess / shl_sphere_hess values (to
+ * rounding: the set reconstructs its summed lobe integrals once); a one-sided
+ * polygon adds nothing on or behind its plane.  A workspace is allocated per call
+ * (SHL_ENOMEM).
+ */
+int shl_lights_eval_hess(const shl_ctx *ctx, const shl_lights *lights, const double x[3], double *rgb,
+                         double *grad, double *hess);
 
 /* ---- zonal harmonics (ZH) and SH operations ----------------------------- */
 /*
@@ -695,10 +832,12 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
 
 /**
  * Instruction set of the context's batch kernels: "scalar", "avx2" (x86-64 with
- * AVX2 and FMA, YMM state enabled by the OS) or "neon" (AArch64); "" for NULL.
+ * AVX2 and FMA, YMM state enabled by the OS), "avx512" (x86-64 with AVX-512 F,
+ * DQ, VL and BW besides, opmask and ZMM state enabled by the OS) or "neon"
+ * (AArch64); "" for NULL.
  * Chosen at shl_ctx_create: the best one compiled in and supported, unless the
  * environment variable SHLIGHT_ISA names another compiled-in, supported one
- * (scalar | avx2 | neon); any other value of SHLIGHT_ISA is ignored.  Or
+ * (scalar | avx2 | avx512 | neon); any other value of SHLIGHT_ISA is ignored.  Or
  * given explicitly to shl_ctx_create_isa.
  */
 const char *shl_ctx_isa(const shl_ctx *ctx);

@@ -12,22 +12,32 @@
  * src/interp_kernel.h, whose formulas and comments this file follows line by
  * line.
  *
+ * Each block also requests a share of the next point's corner rows
+ * (shl__interp_ahead, simd/kernel_api.h), spread evenly over the blocks.
+ *
  * Blocks: a row of n >= VL coefficients is covered by blocks at k = 0, VL, ...
  * and a last block at n - VL, which overlaps the previous one and rewrites the
  * same values.  Rows shorter than VL (nc < VL: lmax 0, one coefficient) run
  * the reference: a zero-padded copy measured 4-8x slower than it
- * (bench/bench_interp.c, lmax 0). */
+ * (bench/bench_interp.c, lmax 0).  A helper may name a narrower ISA's kernel
+ * for them instead, SHL_INTERP_SHORT_ROWS (avx512: lmax 1, 4 coefficients, on
+ * the avx2 kernel). */
 #include "kernel_api.h"
 
 #define ISA(name) SHL_ISA_SUFFIX(name)
 
 #ifndef SHL_VDLEN
-void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,
+                        double *out)
 {
-    shl__interp_ref_f(data, method, nc, s, out);
+    shl__interp_ref_f(data, method, nc, s, ahead, out);
 }
 #else
 #define VL SHL_VDLEN
+#ifdef SHL_INTERP_SHORT_ROWS
+void SHL_INTERP_SHORT_ROWS(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,
+                           double *out);
+#endif
 
 /* The point's weights (shl__interp_point), broadcast. */
 typedef struct {
@@ -54,11 +64,13 @@ static void broadcast(const shl__interp_point *s, weights *W)
 static inline int block_start(int k, int n) { return k + VL <= n ? k : n - VL; }
 
 /* Trilinear: out[i] = sum_j w_j f_j[i] over the 3 nc values (one contiguous row). */
-static void trilinear(const float *const f[8], const weights *W, int nc, double *out)
+static void trilinear(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
 {
     const int n = 3 * nc;
+    shl__interp_ahead_plan(ahead, (size_t)(n + VL - 1) / VL);
     for (int k = 0; k < n; k += VL) {
         const int i = block_start(k, n);
+        shl__interp_ahead_step(ahead);
         vd v = vd_mul(W->w[0], vd_load_float(f[0] + i));
         for (int j = 1; j < 8; ++j) v = vd_fma(W->w[j], vd_load_float(f[j] + i), v);
         vd_store(out + i, v);
@@ -66,11 +78,13 @@ static void trilinear(const float *const f[8], const weights *W, int nc, double 
 }
 
 /* Annen 2004 Eq. (15): sum_j w_j (c_j + grad c_j . d_j), per channel. */
-static void taylor(const float *const f[8], const weights *W, int nc, double *out)
+static void taylor(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
 {
+    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
             const int i = block_start(k, nc);
+            shl__interp_ahead_step(ahead);
             const size_t vo = (size_t)c * nc + i, go = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
             vd o = vd_set1(0.0f);
             for (int j = 0; j < 8; ++j) {
@@ -84,14 +98,16 @@ static void taylor(const float *const f[8], const weights *W, int nc, double *ou
 }
 
 /* Wu 2020 Alg. 4 per channel: along x (lines 4-7), y (lines 8-11), z (line 12). */
-static void hermite(const float *const f[8], const weights *W, int nc, double *out)
+static void hermite(const float *const f[8], const weights *W, int nc, shl__interp_ahead *ahead, double *out)
 {
     const vd x0 = W->hw[0][0], x1 = W->hw[0][1], x2 = W->hw[0][2], x3 = W->hw[0][3];
     const vd y0 = W->hw[1][0], y1 = W->hw[1][1], y2 = W->hw[1][2], y3 = W->hw[1][3];
     const vd z0 = W->hw[2][0], z1 = W->hw[2][1], z2 = W->hw[2][2], z3 = W->hw[2][3];
+    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
             const int i = block_start(k, nc);
+            shl__interp_ahead_step(ahead);
             const size_t vo = (size_t)c * nc + i, gxo = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
             const size_t gyo = gxo + nc, gzo = gxo + 2 * (size_t)nc;
             vd g[4], g_y[4], g_z[4];
@@ -111,10 +127,15 @@ static void hermite(const float *const f[8], const weights *W, int nc, double *o
         }
 }
 
-void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,
+                        double *out)
 {
-    if (nc < VL) { /* rows shorter than a vector: nothing to vectorize */
-        shl__interp_ref_f(data, method, nc, s, out);
+    if (nc < VL) { /* rows shorter than a vector: nothing to vectorize at this width */
+#ifdef SHL_INTERP_SHORT_ROWS
+        SHL_INTERP_SHORT_ROWS(data, method, nc, s, ahead, out);
+#else
+        shl__interp_ref_f(data, method, nc, s, ahead, out);
+#endif
         return;
     }
     const float *f[8];
@@ -122,10 +143,11 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
     weights W;
     broadcast(s, &W);
     if (method == SHL_INTERP_TRILINEAR)
-        trilinear(f, &W, nc, out);
+        trilinear(f, &W, nc, ahead, out);
     else if (method == SHL_INTERP_TAYLOR)
-        taylor(f, &W, nc, out);
+        taylor(f, &W, nc, ahead, out);
     else
-        hermite(f, &W, nc, out);
+        hermite(f, &W, nc, ahead, out);
+    shl__interp_ahead_finish(ahead);
 }
 #endif

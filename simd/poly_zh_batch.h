@@ -6,11 +6,10 @@
  * plain code).  The lobes' recurrences are independent, so one band step of ZW
  * lobes is one chain of vector operations instead of ZW chains.  Written with the
  * compilers' generic vector type (elementwise + - *, no fused multiply-add: gcc's
- * C11 mode and the clang pragma below); every lane runs the same arithmetic, so all
- * ISAs give the same bits.  Eq. 11, 30 and 31 are used with their ratios of
- * integers folded into per-band constants (fewer operations and shorter
- * dependency chains per band step; rounding differs from polygon_zh.h's float
- * instance by a few ulps of each step).  A partial last block repeats its last lobe.  Compiled once
+ * C11 mode and the clang pragma below), each lane does exactly the one-lobe
+ * arithmetic of polygon_zh.h (and of the Hessian's recurrence, polygon_hess.c,
+ * whose values and gradients test_hessian compares with these), so all ISAs give
+ * the same bits.  A partial last block repeats its last lobe.  Compiled once
  * per ISA of simd/isa_list.h (Makefile); needs the polygon geometry of
  * src/polygon.h, so it includes that header. */
 #include "../src/polygon.h"
@@ -62,15 +61,11 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
     /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
     const int ltop = with_grad ? lmax : lmax - 1;
     double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
-    double twol_m1[SHL_LMAX_MAX + 1], al[SHL_LMAX_MAX + 1], be[SHL_LMAX_MAX + 1], ga[SHL_LMAX_MAX + 1], be2[SHL_LMAX_MAX + 1];
+    double l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
     inv_l[lmax + 1] = 1.0 / (lmax + 1);
     for (int l = 0; l <= lmax; ++l) {
+        l_m1[l] = l - 1;
         twol_m1[l] = 2 * l - 1;
-        const double ll = l + (l == 0);
-        al[l] = (2.0 * l - 1.0) / ll;         /* Eq. 11 as P_l = al a P_{l-1} - be P_{l-2} */
-        be[l] = (l - 1.0) / ll;
-        ga[l] = (2.0 * l - 1.0) / (ll * ll); /* Eq. 30-31 folded, below */
-        be2[l] = be[l] * be[l];
         norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
         inv_l[l] = 1.0 / (l + (l == 0));
         s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Eq. 29 weights */
@@ -116,11 +111,11 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                 if (lmax >= 1) edge_i[1] = i_lm1;
             }
             for (int l = 2; l <= ltop; ++l) {
-                const zv alpha = zv_set1(al[l]), beta = zv_set1(be[l]), tlm1 = zv_set1(twol_m1[l]);
-                const zv pl = (alpha * a) * p_lm1 - beta * p_lm2; /* Eq. 11 */
-                const zv dl = tlm1 * b_lm1 + d_lm2;                /* Eq. 32 */
+                const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
+                const zv pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl; /* Eq. 11 */
+                const zv dl = tlm1 * b_lm1 + d_lm2;                  /* Eq. 32 */
                 /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-                const zv dpl = alpha * (af * dp_lm1 + da * p_lm1) - beta * dp_lm2;
+                const zv dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
                 if (with_grad) {
                     const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
                     const zv jl = tlm1 * i_lm1 + j_lm2;
@@ -128,10 +123,9 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                     edge_i[l] = il;
                     /* B_lmax (l = ltop here) goes into the unused bsum[lmax] */
                 }
-                /* Eq. 31, C_{l-1} = (X + (l-1) B_{l-2}) / l, into Eq. 30, B_l = ((2l-1) C_{l-1} - (l-1) B_{l-2}) / l:
-                 * B_l = (2l-1)/l^2 X + ((l-1)/l)^2 B_{l-2} */
-                const zv x = b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1;
-                const zv bl = zv_set1(ga[l]) * x + zv_set1(be2[l]) * b_lm2;
+                /* Eq. 31: C_{l-1} */
+                const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
+                const zv bl = (tlm1 * cl - lm1 * b_lm2) * rl; /* Eq. 30 */
                 b_lm2 = b_lm1, b_lm1 = bl;
                 bsum[l] += c * bl; /* Eq. 14 */
                 p_lm2 = p_lm1, p_lm1 = pl;

@@ -35,6 +35,21 @@ static int shl__cpu_avx2(void)
     __cpuid_count(7, 0, a, b, c, d);
     return (b >> 5) & 1;
 }
+
+/* AVX-512 F, DQ, VL and BW usable (with AVX2 and FMA): CPUID.7.0:EBX reports
+ * them (bits 16, 17, 31, 30), XGETBV(0) shows the OS saves XMM, YMM, opmask,
+ * ZMM_Hi256 and Hi16_ZMM state (bits 1, 2, 5, 6, 7). */
+static int shl__cpu_avx512(void)
+{
+    if (!shl__cpu_avx2()) return 0;
+    unsigned a, b, c, d, xcr0_lo, xcr0_hi;
+    __asm__ volatile("xgetbv" : "=a"(xcr0_lo), "=d"(xcr0_hi) : "c"(0));
+    (void)xcr0_hi;
+    if ((xcr0_lo & 0xE6u) != 0xE6u) return 0;
+    __cpuid_count(7, 0, a, b, c, d);
+    const unsigned need = 1u << 16 | 1u << 17 | 1u << 30 | 1u << 31;
+    return (b & need) == need;
+}
 #endif
 
 #define SHL_ISA(name, flags, cpu) SHL__DECLARE_KERNELS(name)

@@ -39,7 +39,7 @@ int shl_grid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], 
     if (nnodes > SIZE_MAX / node_len / esize) return SHL_ENOMEM;
     shl_grid *g = shl__calloc(1, sizeof *g);
     if (!g) return SHL_ENOMEM;
-    g->data = shl__calloc(nnodes * node_len, esize);
+    g->data = shl__calloc_large(nnodes * node_len, esize);
     if (!g->data) {
         shl__free(g);
         return SHL_ENOMEM;

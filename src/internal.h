@@ -53,6 +53,14 @@ void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double r
 void *shl__malloc(size_t size);
 void *shl__calloc(size_t count, size_t size);
 void shl__free(void *ptr);
+/* shl__calloc for the large arrays read at random (grid nodes): from
+ * SHL__LARGE_ARRAY bytes on, aligned to SHL__HUGE_PAGE and advised to the
+ * kernel as huge pages where it supports it (Linux madvise MADV_HUGEPAGE:
+ * fewer TLB misses on random corner-row reads); smaller arrays are shl__calloc.
+ * Zeroed, one hooked allocation either way, freed with shl__free. */
+#define SHL__HUGE_PAGE ((size_t)2 << 20)
+#define SHL__LARGE_ARRAY ((size_t)4 << 20)
+void *shl__calloc_large(size_t count, size_t size);
 /* Failure injection, defined only in a library built with -DSHL_ALLOC_HOOKS (the
  * test runner's and the fuzzers' copies): the N-th allocation (alloc.c) or thread
  * creation (parallel.c) from now fails, N = the value; < 0: never. */

@@ -21,9 +21,10 @@ typedef shl__interp_point point_setup;
 #undef SUFFIX
 
 /* The scalar table's interpolation (dispatch.c): the reference above. */
-void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, double *out)
+void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,
+                       double *out)
 {
-    interp_f(data, method, nc, s, out);
+    interp_f(data, method, nc, s, ahead, out);
 }
 
 /* Cell and local coordinates of p, clamped to the box. */
@@ -121,27 +122,56 @@ typedef struct {
     double b;
     const double *pts;
     double *out;
+    int ahead; /* request the next point's rows (grids above SHL__INTERP_AHEAD_BYTES) */
 } interp_job;
 
+static void setup_point(const interp_job *job, long p, point_setup *s)
+{
+    locate(job->g, job->pts + 3 * p, s);
+    if (job->method == SHL_INTERP_TAYLOR)
+        taylor_weights(job->g, job->b, s);
+    else if (job->method == SHL_INTERP_HERMITE)
+        hermite_weights(job->g, s);
+    else
+        trilinear_weights(s);
+}
+
+/* The rows point s reads: Taylor and Hermite, all 12 nc elements of each
+ * corner, corners 2q and 2q+1 adjacent nodes (one row of two nodes each);
+ * trilinear, the 3 nc values of each corner. */
+static void ahead_rows(const shl_grid *g, int method, const point_setup *s, shl__interp_ahead *a)
+{
+    const size_t esize = g->storage == SHL_GRID_DOUBLE ? sizeof(double) : sizeof(float);
+    const char *data = g->data;
+    const int pairs = method != SHL_INTERP_TRILINEAR;
+    a->nrange = pairs ? 4 : 8;
+    a->bytes = (pairs ? 2 * g->node_len : 3 * (size_t)g->nc) * esize;
+    for (int r = 0; r < a->nrange; ++r) a->row[r] = data + s->ofs[pairs ? 2 * r : r] * esize;
+}
+
+/* Two points in flight: point p + 1's set-up is made before point p's
+ * arithmetic (the core overlaps the two) and, if job->ahead, its corner rows
+ * are requested during p's arithmetic (shl__interp_ahead).  The results are
+ * those of one point at a time: the requests change no value. */
 static void interp_range(void *arg, int worker, long begin, long end)
 {
     const interp_job *job = arg;
     const shl_grid *g = job->g;
     const size_t nv = 3 * (size_t)g->nc;
+    point_setup s[2];
     (void)worker;
+    if (begin < end) setup_point(job, begin, &s[begin & 1]);
     for (long p = begin; p < end; ++p) {
-        point_setup s;
-        locate(g, job->pts + 3 * p, &s);
-        if (job->method == SHL_INTERP_TAYLOR)
-            taylor_weights(g, job->b, &s);
-        else if (job->method == SHL_INTERP_HERMITE)
-            hermite_weights(g, &s);
-        else
-            trilinear_weights(&s);
+        shl__interp_ahead ahead = {.nrange = 0};
+        if (p + 1 < end) {
+            setup_point(job, p + 1, &s[(p + 1) & 1]);
+            if (job->ahead) ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
+        }
+        double *out = job->out + nv * (size_t)p;
         if (g->storage == SHL_GRID_DOUBLE)
-            interp_d(g->data, job->method, g->nc, &s, job->out + nv * (size_t)p);
+            interp_d(g->data, job->method, g->nc, &s[p & 1], &ahead, out);
         else /* the context's kernel (simd/interp_batch.h; scalar: interp_f) */
-            g->isa->interp_f(g->data, job->method, g->nc, &s, job->out + nv * (size_t)p);
+            g->isa->interp_f(g->data, job->method, g->nc, &s[p & 1], &ahead, out);
     }
 }
 
@@ -167,7 +197,8 @@ static int grid_interp(const shl_grid *grid, int method, double taylor_b, int np
         for (int a = 0; a < 3; ++a) out |= x[a] < grid->lo[a] || x[a] > grid->hi[a];
         outside += out;
     }
-    interp_job job = {grid, method, taylor_b, pts, rgb};
+    const size_t esize = grid->storage == SHL_GRID_DOUBLE ? sizeof(double) : sizeof(float);
+    interp_job job = {grid, method, taylor_b, pts, rgb, grid->nnodes * grid->node_len * esize > SHL__INTERP_AHEAD_BYTES};
     const int st = shl__parallel_for(npts, 256, nthreads, interp_range, &job);
     if (st == SHL_OK && nclamped) *nclamped = outside;
     return st;

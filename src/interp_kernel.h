@@ -63,8 +63,12 @@ static void SUFFIX(hermite)(const ELEM *const f[8], const point_setup *s, int nc
     }
 }
 
-static void SUFFIX(interp)(const ELEM *data, int method, int nc, const point_setup *s, double *restrict out)
+/* The next point's rows (ahead) are all requested first: one block. */
+static void SUFFIX(interp)(const ELEM *data, int method, int nc, const point_setup *s, shl__interp_ahead *ahead,
+                           double *restrict out)
 {
+    shl__interp_ahead_plan(ahead, 1);
+    shl__interp_ahead_step(ahead);
     const ELEM *f[8];
     for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
     if (method == SHL_INTERP_TRILINEAR)

@@ -38,6 +38,13 @@ size_t shl__lights_ws_size(int lmax);
 void shl__lights_eval(const shl_lights *lights, int lmax, double *ws, const double x[3],
                       double *rgb, double *grad);
 
+/* shl__lights_eval with the second derivatives hess[(c*6 + i)*nc + k] (layout of
+ * shl_lights_eval_hess; grad and hess required) and its workspace in doubles
+ * (lights_hess.c); inputs already validated. */
+size_t shl__lights_hess_ws_size(int lmax);
+void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const double x[3], double *rgb,
+                           double *grad, double *hess);
+
 /* Float light-set batch (lights_batch.c), shared with the grid fill: points go
  * in blocks of at most SHL__LIGHTS_BLOCK, each block through the same calls
  * whatever the thread count (results bit for bit independent of it). */

@@ -44,6 +44,26 @@ void shl__poly_zh_f(const shl__poly_geom *g, int lmax, float *zh);
 void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 void shl__poly_zh_grad_f(const shl__poly_geom *g, int lmax, float *zh, float *zh_grad);
 
+/* Value, gradient and Hessian of the ZH integrals interleaved ("z10" layout, lobes d <= 2 lmax,
+ * bands l <= lmax, packed): z10[SHL__Z10(lmax, d, l) + b], b = 0 the value (as shl__poly_zh_grad_d),
+ * 1..3 d/dx, d/dy, d/dz, 4..9 the second derivatives xx, xy, xz, yy, yz, zz (polygon_hess.c).
+ * unscaled = 0: in scaled units (the caller multiplies the gradient by grad_scale, the
+ * Hessian by grad_scale twice); unscaled = 1 (only when shl__poly_hess_fold(g)): the
+ * factors 2^-E, 2^-2E folded into the band weights. */
+#define SHL__ZH_MULTI 10
+#define SHL__Z10(lmax, d, l) (((d) * ((lmax) + 1) + (l)) * SHL__ZH_MULTI)
+#define SHL__Z10_SIZE(lmax) ((2 * (lmax) + 1) * ((lmax) + 1) * SHL__ZH_MULTI)
+void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int unscaled);
+/* 1 when 2^-E and 2^-2E times every band weight K_l (<= 2.5) are normal doubles
+ * (2^-2E in [2^-1000, 2^1000]): a power of two commutes with every rounding, so folding
+ * it in gives the values of multiplying afterwards, bit for bit, unless they leave the
+ * normal range (where both over/underflow alike). */
+static inline int shl__poly_hess_fold(const shl__poly_geom *g)
+{
+    const double s = g->grad_scale[0] * g->grad_scale[1];
+    return s >= 0x1p-500 && s <= 0x1p500;
+}
+
 /* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3 (polygon.c);
  * used by the four instances above when g->sliver and lmax <= SHL__AREA_LMAX. */
 void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
@@ -56,6 +76,11 @@ void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
  * coeffs and the gradient blocks (layout of shl__poly_zh_grad_d, directly after
  * the value's) into grad + (a - 1) * nc. */
 void shl__zh_to_sh_grad(int lmax, const double *zh, double *coeffs, double *grad, int nc);
+/* shl__zh_to_sh of each of the SHL__ZH_MULTI interleaved blocks of z10 (layout above)
+ * into out[b], bit for bit, the blocks side by side (polygon_hess.c). */
+void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI]);
+/* The same for the six Hessian blocks only (b = 4..9) into out[0..5]. */
+void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6]);
 /* Float ZH in, float SH out; accumulates in double. */
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
 

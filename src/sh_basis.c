@@ -9,21 +9,8 @@
  * trigonometric call, square root or division is needed. */
 #include "sh_basis.h"
 
-#define REAL double
-#define SUFFIX(name) name##_d
-#define TAB(name) shl__sh_##name##_d
-#include "sh_basis_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
-
-#define REAL float
-#define SUFFIX(name) name##_f
-#define TAB(name) shl__sh_##name##_f
-#include "sh_basis_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
+#define SHL_REAL_IMPL "sh_basis_impl.h"
+#include "real_instances.h"
 
 void shl__sh_eval(int lmax, double x, double y, double z, double *out)
 {

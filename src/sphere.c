@@ -3,56 +3,58 @@
  * The kernels are in sphere_impl.h, instantiated for double and float. */
 #include "sphere.h"
 
-#define REAL double
-#define SUFFIX(name) name##_d
-#define TAB(name) shl__sh_##name##_d
-#include "sphere_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
+/* Bands with an unrolled value kernel (sphere_small in sphere_impl.h). */
+#define SHL__SPHERE_SMALL 5
+#define SHL__ALWAYS_INLINE __attribute__((always_inline)) inline
+#define SHL__NOINLINE __attribute__((noinline))
 
-#define REAL float
-#define SUFFIX(name) name##_f
-#define TAB(name) shl__sh_##name##_f
-#include "sphere_impl.h"
-#undef REAL
-#undef SUFFIX
-#undef TAB
+#define SHL_REAL_IMPL "sphere_impl.h"
+#include "real_instances.h"
 
-/* Every non-zero |v_k| and a in [2^-100, 2^100]: every product, square and quotient
+/* Every non-zero |v_k| and a in [2^-100, 2^100): every product, square and quotient
  * of the set-up below is a normal double both unscaled and in scaled units, so the
  * scale 2^0 gives the scaled result bit for bit (a power of two commutes with each
- * correctly rounded operation) without the exponent extraction. */
-static int moderate(const double v[3], double a)
+ * correctly rounded operation) without the exponent extraction.  Tested on the bits
+ * (biased exponent in [1023 - 100, 1023 + 100)), one unsigned comparison per value;
+ * false for any non-finite value and for a <= 0. */
+static inline int moderate1(double v)
 {
-    int ok = a >= 0x1p-100 && a <= 0x1p100;
-    for (int k = 0; k < 3; ++k) {
-        const double m = fabs(v[k]);
-        ok &= m == 0.0 || (m >= 0x1p-100 && m <= 0x1p100);
-    }
-    return ok;
+    uint64_t b;
+    memcpy(&b, &v, sizeof b);
+    b <<= 1; /* drop the sign */
+    return (b == 0) | (b - ((uint64_t)(1023 - 100) << 53) < ((uint64_t)200 << 53));
+}
+static inline int moderate(const double v[3], double a)
+{
+    uint64_t b;
+    memcpy(&b, &a, sizeof b); /* a < 0: the sign bit puts b out of range */
+    return (b - ((uint64_t)(1023 - 100) << 52) < ((uint64_t)200 << 52)) & moderate1(v[0]) & moderate1(v[1]) &
+           moderate1(v[2]);
 }
 
-void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
-                           double radius)
+/* Not moderate: vs = center - x in scaled units (internal.h), times 2^-e with the
+ * largest component in [1, 2) (no overflow in the difference, no overflow or
+ * underflow in the norm), and *rs = radius 2^-e; returns e, INT_MIN for the centre
+ * at x.  Out of line: the common path stays short. */
+static SHL__NOINLINE int geom_scaled(double vs[3], const double x[3], const double center[3], double radius, double *rs)
+{
+    int e = INT_MIN;
+    for (int k = 0; k < 3; ++k) {
+        const int ek = shl__ilogb_diff(center[k], x[k]);
+        e = ek > e ? ek : e;
+    }
+    if (e == INT_MIN) return e;
+    for (int k = 0; k < 3; ++k) vs[k] = shl__diff_scaled(center[k], x[k], -e);
+    *rs = e ? shl__ldexp(radius, -e) : radius;
+    return e;
+}
+
+/* From vs = center - x and the radius rs in the same units (scaled or not): inside,
+ * u, t, s2, c and inv_d_s.  vs = 0 (the centre at x) is inside. */
+static inline void geom_units(shl__sphere_geom *g, const double vs[3], double rs)
 {
     g->inside = 1;
-    double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
-    int e = 0;
-    if (!moderate(vs, radius)) {
-        e = INT_MIN;
-        for (int k = 0; k < 3; ++k) {
-            const int ek = shl__ilogb_diff(center[k], x[k]);
-            e = ek > e ? ek : e;
-        }
-        if (e == INT_MIN) return; /* centre at x */
-        /* scaled units (internal.h): center - x times 2^-e, largest component in [1, 2);
-         * no overflow in the difference, no overflow or underflow in the norm */
-        for (int k = 0; k < 3; ++k) vs[k] = shl__diff_scaled(center[k], x[k], -e);
-    } else if (vs[0] == 0.0 && vs[1] == 0.0 && vs[2] == 0.0) {
-        return; /* centre at x */
-    }
-    const double ds = sqrt(shl__dot3(vs, vs)), rs = e ? shl__ldexp(radius, -e) : radius;
+    const double ds = sqrt(shl__dot3(vs, vs));
     if (ds <= rs) return;
     g->inside = 0;
     const double inv = 1.0 / ds; /* one division for u, sin a, cos a (each within 1.5 ulp) */
@@ -62,7 +64,23 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     g->c = sqrt((ds - rs) * (ds + rs)) * inv;          /* cos a, exact difference ds - rs */
     g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
     g->inv_d_s = inv;
-    g->k_alpha_s = g->s2 / g->c * inv;                 /* d cos a / dd = sin^2 a / (d cos a) */
+}
+
+void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
+                           double radius)
+{
+    double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]}, rs = radius;
+    int e = 0;
+    if (!moderate(vs, radius)) {
+        e = geom_scaled(vs, x, center, radius, &rs);
+        if (e == INT_MIN) { /* centre at x */
+            g->inside = 1;
+            return;
+        }
+    }
+    geom_units(g, vs, rs);
+    if (g->inside) return;
+    g->k_alpha_s = g->s2 / g->c * g->inv_d_s;          /* d cos a / dd = sin^2 a / (d cos a) */
     if (!e) {
         g->grad_scale[0] = g->grad_scale[1] = 1.0;
         g->inv_d = g->inv_d_s;
@@ -80,31 +98,85 @@ static int check_radius(double radius)
     return radius > 0.0 ? SHL_OK : SHL_EDOMAIN;
 }
 
-static int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
-                    double *coeffs, double *grad, int want_grad)
+/* The rest of the entry points (sphere_d, sphere_f): argument checks unless
+ * moderate, shl__sphere_geom_init, shl__sphere_sh; out of line, so that the common
+ * paths need no frame for it. */
+static SHL__NOINLINE int sphere_general_d(int lmax, const double x[3], const double center[3], double radius,
+                                          double *coeffs, double *grad, int mod)
 {
-    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
-    if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
-    const int st = check_radius(radius);
-    if (st) return st;
+    if (!mod) {
+        if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
     shl__sphere_geom g;
     shl__sphere_geom_init(&g, x, center, radius);
-    shl__sphere_sh_d(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    shl__sphere_sh_d(lmax, &g, coeffs, grad);
     return SHL_OK;
 }
 
-static int sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
-                    float *coeffs, float *grad, int want_grad)
+static SHL__NOINLINE int sphere_general_f(int lmax, const float x[3], const float center[3], float radius,
+                                          float *coeffs, float *grad, int mod)
 {
-    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
-    if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
-    const int st = check_radius(radius);
-    if (st) return st;
+    if (!mod) {
+        if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
+        const int st = check_radius(radius);
+        if (st) return st;
+    }
     const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
     shl__sphere_geom g;
     shl__sphere_geom_init(&g, xd, cd, radius);
-    shl__sphere_sh_f(ctx->lmax, &g, coeffs, want_grad ? grad : NULL);
+    shl__sphere_sh_f(lmax, &g, coeffs, grad);
     return SHL_OK;
+}
+
+/* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
+ * so in the common case no further check is needed and no scaling (the exponent e
+ * of shl__sphere_geom_init is 0); coefficients without gradient, and with it up to
+ * band SHL__SPHERE_SMALL, then take their geometry to the kernels in registers (the
+ * address of g is never taken). */
+static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
+                                       double *coeffs, double *grad, int want_grad)
+{
+    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
+    const double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    const int mod = moderate(vs, radius);
+    if (mod && !want_grad) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_value_d(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_grad_small_d(ctx->lmax, &g, coeffs, grad);
+        return SHL_OK;
+    }
+    return sphere_general_d(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
+}
+
+/* As sphere_d; the geometry in double from the float arguments (exact). */
+static SHL__ALWAYS_INLINE int sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
+                                       float *coeffs, float *grad, int want_grad)
+{
+    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
+    const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
+    const double vs[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
+    const int mod = moderate(vs, radius);
+    if (mod && !want_grad) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_value_f(ctx->lmax, &g, coeffs);
+        return SHL_OK;
+    }
+    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
+        shl__sphere_geom g;
+        geom_units(&g, vs, radius);
+        sphere_grad_small_f(ctx->lmax, &g, coeffs, grad);
+        return SHL_OK;
+    }
+    return sphere_general_f(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
 }
 
 int shl_sphere(const shl_ctx *ctx, const double x[3], const double center[3], double radius,

@@ -4,12 +4,10 @@
  *
  * Tolerance: the set's result is the sum over lights of rgb_c times each
  * light's unit-radiance result, so its error is at most the sum of the lights'
- * own errors times |rgb_c|, plus the float summation (n lights x FLT_EPSILON x
- * sum |terms|, |L_lm| <= sqrt(2l+1) |L00|: < 4e-6 sum |rgb| |L00| for the at
- * most 8 lights and lmax <= 30 of the tests using it, well inside the per-light tolerances).  Each
+ * own errors times |rgb_c|, plus the float summation over the n lights
+ * (worst case n u_f |terms|, |L_lm| <= sqrt(2l+1) |L00|, |grad| <= max|grad|).  Each
  * light's error is bounded by the tolerance its own batch test states:
- * polygons (test_simd.c) 2e-5 + 4e-5/theta of |L00| and 1e-4 + 5e-5/theta of
- * max|grad| (theta = sqrt(solid angle)), spheres (test_simd_sphere_interp.c)
+ * polygons: the per-band tolerances of float_tol.h (derived), spheres (test_simd_sphere_interp.c)
  * 2e-5 |L00| and 1e-5 max|grad| up to lmax 14, 1.5e-4 and 3e-5 above.  Per
  * light, |L00| and max|grad| come from shl_polygon_grad / shl_sphere_grad in
  * double.  The floor 16 FLT_MIN per light
@@ -17,6 +15,7 @@
 #ifndef SHL_BATCH_TOL_H
 #define SHL_BATCH_TOL_H
 
+#include "float_tol.h"
 #include "harness.h"
 #include "shlight.h"
 #include <float.h>
@@ -53,21 +52,30 @@ static inline void add_sphere(light_set *s, const double center[3], double radiu
     s->sphere[i] = 1;
 }
 
-/* Per-colour tolerances tc[c], tg[c] at x: the sum over lights reaching x of
- * |rgb_c| times the light's tolerance (see the top of the file). */
-static inline void tolerances(const shl_ctx *ctx, const light_set *s, const double x[3], double tc[3], double tg[3])
+/* Band of coefficient k (k = l^2 .. l^2 + 2l). */
+static inline int band_of(int k) { return (int)sqrt(k + 0.5); }
+
+/* err / tol; a zero tolerance (nothing reaches x in this channel) admits only exact zeros. */
+static inline double tol_ratio(double err, double tol) { return tol > 0.0 ? err / tol : (err == 0.0 ? 0.0 : HUGE_VAL); }
+
+/* Per-colour, per-band tolerances tc[c][l], tg[c][l] at x: the sum over lights
+ * reaching x of |rgb_c| times the light's tolerance (see the top of the file). */
+static inline void tolerances(const shl_ctx *ctx, const light_set *s, const double x[3], double tc[3][SHL_LMAX_MAX + 1],
+                              double tg[3][SHL_LMAX_MAX + 1])
 {
     const int lmax = shl_ctx_lmax(ctx), nc = SHL_NCOEFFS(lmax);
     static double c[NCMAX], g[3 * NCMAX];
-    for (int k = 0; k < 3; ++k) tc[k] = tg[k] = 0.0;
+    const double sum_c = s->count * (FLT_EPSILON / 2); /* float sum over the lights, |L_lm| <= sqrt(2l+1) |L00| */
+    for (int k = 0; k < 3; ++k)
+        for (int l = 0; l <= lmax; ++l) tc[k][l] = tg[k][l] = 0.0;
     for (int i = 0; i < s->count; ++i) {
-        double ct, gt;
+        double ct = 0.0, gt = 0.0, omega = 0.0; /* spheres: relative to |L00|, max|grad| */
         if (s->sphere[i]) {
             CHECK(shl_sphere_grad(ctx, x, s->center[i], s->radius[i], c, g) == SHL_OK);
             ct = lmax <= 14 ? 2e-5 : 1.5e-4;
             gt = lmax <= 14 ? 1e-5 : 3e-5;
         } else {
-            double omega, nrm[3] = {0, 0, 0};
+            double nrm[3] = {0, 0, 0};
             const double *v = s->v[i];
             for (int j = 1; j + 1 < s->n[i]; ++j) { /* Newell normal, fan from v_0 */
                 const double e[3] = {v[3 * j] - v[0], v[3 * j + 1] - v[1], v[3 * j + 2] - v[2]};
@@ -81,15 +89,19 @@ static inline void tolerances(const shl_ctx *ctx, const light_set *s, const doub
             CHECK(shl_polygon_grad(ctx, x, v, s->n[i], c, g) == SHL_OK);
             CHECK(shl_polygon_solid_angle(x, v, s->n[i], &omega) == SHL_OK);
             if (omega == 0.0) continue;
-            ct = 2e-5 + 4e-5 / sqrt(omega);
-            gt = 1e-4 + 5e-5 / sqrt(omega);
         }
         double gmax = 0.0;
         for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(g[k]));
-        for (int k = 0; k < 3; ++k) {
-            tc[k] += fabs(s->rgb[i][k]) * (ct * fabs(c[0]) + 16.0 * FLT_MIN);
-            tg[k] += fabs(s->rgb[i][k]) * (gt * gmax + 16.0 * FLT_MIN);
-        }
+        double tcl[SHL_LMAX_MAX + 1], tgl[SHL_LMAX_MAX + 1];
+        if (s->sphere[i])
+            for (int l = 0; l <= lmax; ++l) tcl[l] = ct * fabs(c[0]), tgl[l] = gt * gmax;
+        else
+            float_poly_tol(lmax, x, s->v[i], s->n[i], omega, gmax, 1, tcl, tgl);
+        for (int k = 0; k < 3; ++k)
+            for (int l = 0; l <= lmax; ++l) {
+                tc[k][l] += fabs(s->rgb[i][k]) * (tcl[l] + sum_c * sqrt(2.0 * l + 1.0) * fabs(c[0]) + 16.0 * FLT_MIN);
+                tg[k][l] += fabs(s->rgb[i][k]) * (tgl[l] + sum_c * gmax + 16.0 * FLT_MIN);
+            }
     }
 }
 

@@ -76,22 +76,3 @@ void capref_sphere(int lmax, const double x[3], const double c[3], double r, dou
     /* 1 - cos a = 1 - sqrt(d^2 - r^2)/d = r^2 / (d (d + sqrt(d^2 - r^2))) */
     capref_cap(lmax, axis, (double)((long double)r * r / (d * (d + sqrtl((d - r) * (d + r))))), coeffs);
 }
-
-void capref_sphere_fd(int lmax, const double x[3], const double c[3], double r, double h, double *grad)
-{
-    static const double wts[4] = {672.0, -168.0, 32.0, -3.0}; /* / 840 h */
-    const int nc = SHL_NCOEFFS(lmax);
-    double fp[SHL_NCOEFFS(CAPREF_LMAX)], fm[SHL_NCOEFFS(CAPREF_LMAX)];
-    for (int a = 0; a < 3; ++a) {
-        memset(grad + a * nc, 0, sizeof(double) * nc);
-        for (int s = 1; s <= 4; ++s) {
-            double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
-            xp[a] += s * h;
-            xm[a] -= s * h;
-            capref_sphere(lmax, xp, c, r, fp);
-            capref_sphere(lmax, xm, c, r, fm);
-            for (int k = 0; k < nc; ++k) grad[a * nc + k] += wts[s - 1] * (fp[k] - fm[k]);
-        }
-        for (int k = 0; k < nc; ++k) grad[a * nc + k] /= 840.0 * h;
-    }
-}

@@ -18,8 +18,4 @@ void capref_cap(int lmax, const double axis[3], double t, double *coeffs);
  * when x is inside or on it. */
 void capref_sphere(int lmax, const double x[3], const double c[3], double r, double *coeffs);
 
-/* d coeffs / d x by 8th-order central differences of capref_sphere with step h:
- * grad[a*nc + k]. */
-void capref_sphere_fd(int lmax, const double x[3], const double c[3], double r, double h, double *grad);
-
 #endif

@@ -1,8 +1,9 @@
-/* Test runner: runs every registered test, or those selected by argv[1], a
+/* Test runner: runs every registered test, or those selected by a filter, a
  * comma-separated list of substrings: a test runs if its name contains one of
  * the plain parts (every test when there are none) and none of the parts
  * written -substring.  Prints one line per test with its time, and ends with
- * "N passed, M failed". */
+ * "N passed, M failed".  Usage: run_tests [FILTER] [--log FILE]: --log also
+ * writes those lines to FILE (tools/check_readme_figures.py reads it). */
 #include "harness.h"
 #include <stdarg.h>
 #include <stdlib.h>
@@ -85,9 +86,33 @@ static int by_name(const void *a, const void *b)
     return strcmp(na, nb);
 }
 
+static void report(FILE *log, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    if (log) {
+        va_start(ap, fmt);
+        vfprintf(log, fmt, ap);
+        va_end(ap);
+    }
+}
+
 int main(int argc, char **argv)
 {
-    const char *filter = argc > 1 ? argv[1] : NULL;
+    const char *filter = NULL, *log_path = NULL;
+    for (int i = 1; i < argc; ++i) {
+        if (strcmp(argv[i], "--log") == 0 && i + 1 < argc)
+            log_path = argv[++i];
+        else
+            filter = argv[i];
+    }
+    FILE *log = log_path ? fopen(log_path, "w") : NULL;
+    if (log_path && !log) {
+        fprintf(stderr, "run_tests: cannot write %s\n", log_path);
+        return 2;
+    }
     int passed = 0, failed = 0;
     qsort(tests, (size_t)ntests, sizeof tests[0], by_name);
     for (int i = 0; i < ntests; ++i) {
@@ -99,14 +124,15 @@ int main(int argc, char **argv)
         const double ms = now_ms() - t0;
         if (current_failures == 0) {
             ++passed;
-            printf("ok   %s (%.0f ms)%s%s\n", tests[i].name, ms, notes[0] ? "  -- " : "", notes);
+            report(log, "ok   %s (%.0f ms)%s%s\n", tests[i].name, ms, notes[0] ? "  -- " : "", notes);
         } else {
             ++failed;
-            printf("FAIL %s (%d failed checks, %.0f ms)%s%s\n", tests[i].name, current_failures, ms,
+            report(log, "FAIL %s (%d failed checks, %.0f ms)%s%s\n", tests[i].name, current_failures, ms,
                    notes[0] ? "  -- " : "", notes);
         }
         fflush(stdout);
     }
-    printf("%d passed, %d failed\n", passed, failed);
+    report(log, "%d passed, %d failed\n", passed, failed);
+    if (log && fclose(log) != 0) return 2;
     return failed ? 1 : 0;
 }

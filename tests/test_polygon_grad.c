@@ -1,6 +1,7 @@
 /* Polygon SH gradients (Wu et al. 2020) against the independent reference
  * (ref_quad.c: moving-boundary or differentiated area-form quadrature).
  * Errors are relative to the largest gradient magnitude of the case. */
+#include "float_tol.h"
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
@@ -102,23 +103,33 @@ SHL_TEST(polygon_grad_every_isa)
     harness_note("lmax 20 max gradient error / max|grad| per ISA: %s(tol 1e-8)", note);
 }
 
+/* One configuration of the float path (double geometry) against the reference
+ * gradient, with the derived per-band tolerance of float_tol.h.  Its error is
+ * ~0.01 of the tolerance: a single point sits in the bulk of the rounding
+ * distribution, while the tolerance is LAMBDA = 6 deviations for the tail
+ * over many points (test_simd.c's sweeps reach 0.05-0.13). */
 SHL_TEST(polygon_grad_float)
 {
     shl_ctx *ctx;
     CHECK(shl_ctx_create(14, &ctx) == SHL_OK);
     const float vf[12] = {-0.5f, -0.2f, 1.0f, 0.7f, -0.1f, 1.2f, 0.1f, 0.8f, 0.9f, -0.6f, 0.5f, 0.8f};
     const float xf[3] = {0.1f, 0.1f, 0.0f};
-    double v[12], x[3] = {xf[0], xf[1], xf[2]}, rc[NCMAX], rg[3 * NCMAX], scale = 0, worst = 0;
+    double v[12], x[3] = {xf[0], xf[1], xf[2]}, rc[NCMAX], rg[3 * NCMAX], scale = 0, worst = 0, ratio = 0, omega;
+    double tc[15], tg[15];
     float c[NCMAX], g[3 * NCMAX];
     for (int k = 0; k < 12; ++k) v[k] = vf[k];
     CHECK(shl_polygon_grad_f(ctx, xf, vf, 3, c, g) == SHL_OK);
     CHECK(ref_polygon_sh_grad(14, x, v, 3, rc, rg, NULL) == 0);
+    CHECK(shl_polygon_solid_angle(x, v, 3, &omega) == SHL_OK);
+    for (int k = 0; k < 3 * SHL_NCOEFFS(14); ++k) scale = fmax(scale, fabs(rg[k]));
+    float_poly_tol(14, x, v, 3, omega, scale, 0, tc, tg); /* derived per-band tolerance */
     for (int k = 0; k < 3 * SHL_NCOEFFS(14); ++k) {
-        scale = fmax(scale, fabs(rg[k]));
         worst = fmax(worst, fabs(g[k] - rg[k]));
+        ratio = fmax(ratio, fabs(g[k] - rg[k]) / tg[(int)sqrt(k % SHL_NCOEFFS(14) + 0.5)]);
     }
-    CHECK(worst / scale <= 1e-4);
-    harness_note("float lmax 14 gradient error / max|grad| %.1e (tol 1e-4)", worst / scale);
+    CHECK(ratio <= 1.0);
+    harness_note("float lmax 14 gradient error / max|grad| %.1e; error / derived tolerance (float_tol.h) %.2f",
+                 worst / scale, ratio);
     shl_ctx_destroy(ctx);
 }
 

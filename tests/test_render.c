@@ -18,10 +18,18 @@
  *    analytic image measures 2e-4 of the mean), and it converges: halving the spacing (4^3 -> 8^3) divides the
  *    error against per-vertex analytic shading by more than 4 (order > 2, i.e.
  *    beyond trilinear; tricubic Hermite with linearly carried gradients is order 3);
- *  - the rendered image does not depend on the thread count. */
+ *  - the rendered image does not depend on the thread count;
+ *  - the VPL and VSL baselines of HVL Table 2 (bench/common/hvlpass.c): VSL's cone estimate
+ *    against a midpoint quadrature of the same cone integral, and VSL's small-sphere limit
+ *    against VPL (error analyses at the tests);
+ *  - the harness's parallel loop (bench/common/parfor.c on the library's shl__parallel_for)
+ *    visits every item once in chunks of at most `grain`, also when a thread cannot be
+ *    created (then on the calling thread, returning -1). */
 #include "harness.h"
+#include "internal.h" /* shl__thread_fail_after: the test hook of the SHL_ALLOC_HOOKS build */
 #include "image.h"
 #include "lambert.h"
+#include "parfor.h"
 #include "prt.h"
 #include "vec3.h"
 #include "testutil.h"
@@ -273,4 +281,103 @@ SHL_TEST(render_threads_bit_identical)
     free(d);
     teardown(&f1);
     teardown(&f2);
+}
+
+/* VSL (Hasan 2009 Eq. 5) with k^2 = 2500 jittered strata against a 1000 x 1000 midpoint rule
+ * over the cone in (cos theta, phi), dw = dcos dphi.  Tolerance: 5 sigma of plain uniform cone
+ * sampling, sigma^2 = (Omega^2 E[g^2] - I^2) / N (jittered stratification has at most that
+ * variance), plus the quadrature's error: the integrand g = cos+_x cos+_y is smooth except on the
+ * two curves where a cosine crosses 0; a curve crosses at most 4 x 1000 cells, each off by at
+ * most its area x max g, so the error is <= 8000 Omega max g / 1e6 (the smooth cells' O(h^2)
+ * error is far smaller).  Two configurations: the cone fully above both horizons, and cut by both. */
+SHL_TEST(render_vsl_cone_quadrature)
+{
+    const double cfg[2][4][3] = {
+        {{0.1, 0.2, -1.0}, {0.0, 0.0, 1.0}, {0.3, -0.2, -1.0}, {0.4, 0, 0}}, /* x, n, HVL normal, radius; HVL at 0 */
+        {{-0.2, 0.0, 1.0}, {1.0, 0.0, 0.0}, {0.6, 0.0, 0.8}, {0.9, 0, 0}},
+    };
+    for (int c = 0; c < 2; ++c) {
+        shl_hvl h;
+        memset(&h, 0, sizeof h);
+        double n[3], a[3], t[3], b[3];
+        memcpy(n, cfg[c][1], sizeof n);
+        memcpy(h.normal, cfg[c][2], sizeof h.normal);
+        v3_normalize(n);
+        v3_normalize(h.normal);
+        h.radius = cfg[c][3][0];
+        v3_sub(a, h.pos, cfg[c][0]);
+        const double d = v3_normalize(a), ca = sqrt(1 - h.radius * h.radius / (d * d)), omega = 2 * M_PI * (1 - ca);
+        v3_basis(a, t, b);
+        const int m = 1000;
+        double sum = 0.0, sum2 = 0.0, gmax = 0.0;
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; j < m; ++j) {
+                const double co = ca + (1 - ca) * (i + 0.5) / m, si = sqrt(1 - co * co), ph = 2 * M_PI * (j + 0.5) / m;
+                double w[3];
+                for (int q = 0; q < 3; ++q) w[q] = co * a[q] + si * (cos(ph) * t[q] + sin(ph) * b[q]);
+                const double g = fmax(0.0, v3_dot(n, w)) * fmax(0.0, -v3_dot(h.normal, w));
+                sum += g;
+                sum2 += g * g;
+                gmax = fmax(gmax, g);
+            }
+        const double I = sum * omega / ((double)m * m), Eg2 = sum2 / ((double)m * m), N = 2500;
+        const double sigma = sqrt(fmax(0.0, omega * omega * Eg2 - I * I) / N), quad = 8000 * omega * gmax / 1e6;
+        const double est = vsl_radiance(&h, cfg[c][0], n, 50, 12345u) * M_PI * M_PI * M_PI * h.radius * h.radius;
+        harness_note("config %d: VSL %.6e, quadrature %.6e, |diff| %.2e, tol %.2e", c, est, I, fabs(est - I), 5 * sigma + quad);
+        CHECK(I > 0);
+        CHECK(fabs(est - I) <= 5 * sigma + quad);
+    }
+}
+
+/* A VSL of radius r at distance d tends to the VPL at its centre: the cone's solid angle is
+ * pi r^2 / d^2 (1 + O(r^2/d^2)), and over a cone of half-angle alpha = asin(r/d) the integrand
+ * cos_x cos_y (each a unit-gradient function of w, both >= 0.5 here) changes by at most 2 alpha,
+ * i.e. relatively by at most 2 alpha / 0.25 = 8 alpha.  With r/d = 1e-4 the tolerance is 1e-3. */
+SHL_TEST(render_vsl_point_limit)
+{
+    shl_hvl h;
+    memset(&h, 0, sizeof h);
+    const double x[3] = {0.3, -0.1, -2.0}, n[3] = {0, 0, 1};
+    double nh[3] = {0.2, 0.1, -1.0}, w[3];
+    v3_normalize(nh);
+    memcpy(h.normal, nh, sizeof nh);
+    v3_sub(w, h.pos, x);
+    const double d = v3_normalize(w);
+    h.radius = 1e-4 * d;
+    CHECK(v3_dot(n, w) >= 0.5 && -v3_dot(nh, w) >= 0.5);
+    const double vpl = vpl_radiance(&h, x, n), vsl = vsl_radiance(&h, x, n, 3, 7u);
+    harness_note("VPL %.9e, VSL (r/d 1e-4, 9 samples) %.9e, rel. diff %.2e", vpl, vsl, fabs(vsl / vpl - 1));
+    CHECK(vpl > 0 && fabs(vsl / vpl - 1) <= 1e-3);
+}
+
+typedef struct {
+    long grain;
+    int nthreads;
+    unsigned char *seen;
+    unsigned char *chunk_bad; /* per chunk: longer than grain, misaligned, or a worker index out of range */
+} parfor_probe;
+
+static void parfor_visit(void *arg, int worker, long begin, long end)
+{
+    parfor_probe *q = arg;
+    for (long i = begin; i < end; ++i) ++q->seen[i];
+    q->chunk_bad[begin / q->grain] = end - begin > q->grain || begin % q->grain || worker < 0 || worker >= q->nthreads;
+}
+
+SHL_TEST(render_parfor_library_loop)
+{
+    enum { N = 1000, GRAIN = 7 };
+    unsigned char seen[N], chunk_bad[N / GRAIN + 1];
+    for (int fail = -1; fail <= 0; ++fail)
+        for (int nt = 1; nt <= 3; ++nt) {
+            parfor_probe q = {GRAIN, nt, seen, chunk_bad};
+            memset(seen, 0, sizeof seen);
+            memset(chunk_bad, 0, sizeof chunk_bad);
+            shl__thread_fail_after = fail; /* 0: the first thread creation fails */
+            const int st = par_for(N, GRAIN, nt, parfor_visit, &q);
+            shl__thread_fail_after = -1;
+            CHECK(st == (fail == 0 && nt > 1 ? -1 : 0));
+            for (int i = 0; i < N; ++i) CHECK(seen[i] == 1);
+            for (int c = 0; c < N / GRAIN + 1; ++c) CHECK(!chunk_bad[c]);
+        }
 }

@@ -4,6 +4,7 @@
  * shl_polygon_grad_f), for every ISA this machine runs (contexts from
  * shl_ctx_create_isa).  Errors: coefficients relative to |L00| of the reference,
  * gradients relative to the largest reference gradient of the point. */
+#include "float_tol.h"
 #include "geom.h"
 #include "../src/internal.h"
 #include "harness.h"
@@ -27,17 +28,9 @@ typedef struct {
  * / |L00|, gradients / max|grad|), and raw for polygons subtending theta >= 0.5 rad. */
 typedef struct { double coef, grad, lane_coef, lane_grad, raw_coef, raw_grad, raw_coef_big, raw_grad_big; } errors;
 
-/* Float tolerances, 2-3 times the worst errors measured over 4000 random polygons
- * and points (bench/RESULTS.md sec. 4): coefficients 2e-5 |L00| plus the float
- * cancellation of the boundary sums (O(theta) terms over the edges adding to
- * O(theta^2), Wang 2018 Eq. 29), measured up to 1.7e-5 / theta for a polygon of
- * angular size theta = sqrt(solid angle) (shl_polygon_f: 6.6e-6 / theta, its
- * geometry is double); gradients 1e-4 max|grad| plus 5e-5 / theta (measured
- * 2.3e-5 / theta).  Hard cases add the conditioning term 8 FLT_EPSILON * scale *
- * max|grad| of 1-ulp moves of the inputs (scale: the largest coordinate), as
- * test_polygon.c does in double. */
-static double coef_tol(double theta) { return 2e-5 + 4e-5 / theta; }
-static double grad_tol(double theta) { return 1e-4 + 5e-5 / theta; }
+/* Tolerances: float_tol.h (derived, per band).  The hard cases add the
+ * conditioning term 8 FLT_EPSILON * scale * max|grad| of 1-ulp moves of the
+ * inputs (scale: the largest coordinate), as test_polygon.c does in double. */
 
 /* Run one case on ctx: every point against the double reference and against the
  * scalar float path (twice the tolerance: both carry float error), all outputs
@@ -59,44 +52,48 @@ static errors run_case(const shl_ctx *ctx, const batch_case *bc, int hard)
     for (int p = 0; p < np; ++p) {
         const double x[3] = {bc->p[3 * p], bc->p[3 * p + 1], bc->p[3 * p + 2]};
         const float *cp = c + p * nc, *gp = g + 3 * p * nc;
-        double omega, gmax = 0, ec = 0, eg = 0, lc = 0, lg = 0;
+        double omega, gmax = 0, ec = 0, eg = 0, lc = 0, lg = 0, rc = 0, rg = 0, rlc = 0, rlg = 0, tc[SHL_LMAX_MAX + 1],
+                      tg[SHL_LMAX_MAX + 1];
         int finite = 1;
         CHECK(shl_polygon_grad(ctx, x, vd, bc->n, cr, gr) == SHL_OK);
         CHECK(shl_polygon_grad_f(ctx, bc->p + 3 * p, bc->v, bc->n, cf, gf) == SHL_OK);
         CHECK(shl_polygon_solid_angle(x, vd, bc->n, &omega) == SHL_OK);
         for (int k = 0; k < 3 * nc; ++k) gmax = fmax(gmax, fabs(gr[k]));
-        for (int k = 0; k < nc; ++k) {
-            finite &= isfinite(cp[k]) && cp[k] == c2[p * nc + k];
-            ec = fmax(ec, fabs(cp[k] - cr[k]));
-            lc = fmax(lc, fabs(cp[k] - cf[k]));
-        }
-        for (int k = 0; k < 3 * nc; ++k) {
-            finite &= isfinite(gp[k]);
-            eg = fmax(eg, fabs(gp[k] - gr[k]));
-            lg = fmax(lg, fabs(gp[k] - gf[k]));
-        }
+        for (int k = 0; k < nc; ++k) finite &= isfinite(cp[k]) && cp[k] == c2[p * nc + k];
+        for (int k = 0; k < 3 * nc; ++k) finite &= isfinite(gp[k]);
         CHECK(finite);
         if (omega == 0.0) { /* sees nothing: exact zeros, as the scalar paths */
             for (int k = 0; k < nc; ++k) CHECK(cp[k] == 0.0f && cf[k] == 0.0f);
             for (int k = 0; k < 3 * nc; ++k) CHECK(gp[k] == 0.0f);
             continue;
         }
+        float_poly_tol(lmax, x, vd, bc->n, omega, gmax, 1, tc, tg);
         const double l00 = fabs(cr[0]), theta = sqrt(omega);
-        const double cond = hard ? 8.0 * FLT_EPSILON * fmax(scale, fmax(fabs(x[0]), fmax(fabs(x[1]), fabs(x[2])))) * gmax / l00 : 0.0;
-        const double tc = coef_tol(theta) + cond, tg = grad_tol(theta);
-        ec /= l00, lc /= l00, eg /= gmax, lg /= gmax;
-        if (!(ec <= tc && eg <= tg && lc <= 2 * tc && lg <= 2 * tg))
+        const double cond = hard ? 8.0 * FLT_EPSILON * fmax(scale, fmax(fabs(x[0]), fmax(fabs(x[1]), fabs(x[2])))) * gmax : 0.0;
+        for (int l = 0; l <= lmax; ++l)
+            for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+                const double dc = fabs(cp[k] - cr[k]), dl = fabs(cp[k] - cf[k]);
+                ec = fmax(ec, dc), lc = fmax(lc, dl);
+                rc = fmax(rc, dc / (tc[l] + cond)), rlc = fmax(rlc, dl / (tc[l] + cond));
+                for (int a = 0; a < 3; ++a) {
+                    const double dg = fabs(gp[a * nc + k] - gr[a * nc + k]), dgl = fabs(gp[a * nc + k] - gf[a * nc + k]);
+                    eg = fmax(eg, dg), lg = fmax(lg, dgl);
+                    rg = fmax(rg, dg / tg[l]), rlg = fmax(rlg, dgl / tg[l]);
+                }
+            }
+        ec /= l00, eg /= gmax;
+        if (!(rc <= 1.0 && rg <= 1.0 && rlc <= 2.0 && rlg <= 2.0))
             harness_fail(__FILE__, __LINE__,
-                         "%s [%s, lmax %d] point %d (%a, %a, %a), theta %.2g: coeffs %.3g (tol %.2g), grad %.3g "
-                         "(tol %.2g), vs scalar float %.3g, %.3g",
-                         bc->what, shl_ctx_isa(ctx), lmax, p, x[0], x[1], x[2], theta, ec, tc, eg, tg, lc, lg);
+                         "%s [%s, lmax %d] point %d (%a, %a, %a), theta %.2g: coeffs %.3g |L00| (error/tol %.3g), "
+                         "grad %.3g max|grad| (error/tol %.3g), vs scalar float error/tol %.3g, %.3g",
+                         bc->what, shl_ctx_isa(ctx), lmax, p, x[0], x[1], x[2], theta, ec, rc, eg, rg, rlc, rlg);
         e.raw_coef = fmax(e.raw_coef, ec);
         e.raw_grad = fmax(e.raw_grad, eg);
         if (theta >= 0.5) e.raw_coef_big = fmax(e.raw_coef_big, ec), e.raw_grad_big = fmax(e.raw_grad_big, eg);
-        e.coef = fmax(e.coef, ec / tc);
-        e.grad = fmax(e.grad, eg / tg);
-        e.lane_coef = fmax(e.lane_coef, lc / tc);
-        e.lane_grad = fmax(e.lane_grad, lg / tg);
+        e.coef = fmax(e.coef, rc);
+        e.grad = fmax(e.grad, rg);
+        e.lane_coef = fmax(e.lane_coef, rlc);
+        e.lane_grad = fmax(e.lane_grad, rlg);
     }
     return e;
 }
@@ -401,6 +398,26 @@ SHL_TEST(simd_dispatch)
     harness_note("default %s; %s", best ? best->name : "?", info);
 }
 
+/* The CPU checks of src/dispatch.c against the compiler's own CPU model
+ * (__builtin_cpu_supports: CPUID and, for AVX and AVX-512 state, XGETBV, in
+ * libgcc / compiler-rt): each x86 ISA is supported exactly when every feature
+ * its flags enable is (avx512: F, DQ, VL, BW, with AVX2 and FMA).  So on a CPU
+ * with AVX-512 the SIMD tests cannot silently skip it. */
+SHL_TEST(simd_isa_matches_cpu)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init();
+    const int avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    const int avx512 = avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                       __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+    CHECK((shl__isa_find("avx2") != NULL) == avx2);
+    CHECK((shl__isa_find("avx512") != NULL) == avx512);
+    harness_note("CPU: avx2+fma %s, avx512 f/dq/vl/bw %s", avx2 ? "yes" : "no", avx512 ? "yes" : "no");
+#else
+    harness_note("not x86-64: nothing to compare");
+#endif
+}
+
 SHL_TEST(simd_bad_input)
 {
     shl_ctx *ctx;
@@ -518,7 +535,7 @@ SHL_TEST(simd_float_unresolved_points)
  * path (src/batch.c), so the far points must equal shl_polygon_grad_f bit for bit
  * and meet the float contract of issue 18: 1e-4 of omega at theta = 1e-3, 1e-3
  * below (the double recurrence there keeps a few FLT_EPSILON).  The near points
- * keep the kernel's derived tolerance coef_tol (relative to |L00| = omega / sqrt(4 pi)). */
+ * keep the kernel's derived per-band tolerance (float_tol.h). */
 SHL_TEST(simd_float_small_lights)
 {
     enum { LM = 8, N8 = SHL_NCOEFFS(LM), NP = 3 };
@@ -558,10 +575,14 @@ SHL_TEST(simd_float_small_lights)
                         if (!(e <= tol)) harness_fail(__FILE__, __LINE__, "%s theta %.0e d %g: error/omega %.3g > %.0e",
                                                       isas[i], theta, d, e, tol);
                     } else {
-                        const double tq = sqrt(omega), tol = coef_tol(tq) / sqrt(4.0 * M_PI);
-                        worst_near = fmax(worst_near, e / tol);
-                        if (!(e <= tol)) harness_fail(__FILE__, __LINE__, "%s theta %.0e d %g near point %d: error/omega %.3g > %.3g",
-                                                      isas[i], theta, d, q, e, tol);
+                        double tc[LM + 1], tg[LM + 1], gd[3 * N8], cd[N8], gmax = 0.0, r = 0.0;
+                        CHECK(shl_polygon_grad(ctx, x, vd, 4, cd, gd) == SHL_OK);
+                        for (int k = 0; k < 3 * N8; ++k) gmax = fmax(gmax, fabs(gd[k]));
+                        float_poly_tol(LM, x, vd, 4, omega, gmax, 1, tc, tg);
+                        for (int k = 0; k < N8; ++k) r = fmax(r, fabs(c[q * N8 + k] - want[k]) / tc[(int)sqrt(k + 0.5)]);
+                        worst_near = fmax(worst_near, r);
+                        if (!(r <= 1.0)) harness_fail(__FILE__, __LINE__, "%s theta %.0e d %g near point %d: error/tol %.3g",
+                                                      isas[i], theta, d, q, r);
                     }
                 }
             }

@@ -341,6 +341,54 @@ SHL_TEST(simd_interp_vs_reference)
                      worst[0], worst[1], worst[2], storage[0], storage[1], storage[2]);
 }
 
+/* Look-ahead (src/interp.c: a point's set-up and, for grids above
+ * SHL__INTERP_AHEAD_BYTES, its corner rows are prepared while the previous
+ * point is computed) changes no value: on every ISA, storage and method, for a
+ * grid below and one above that size, a call over all points, a call over an
+ * odd sub-range and calls of 3 threads equal one call per point (which has no
+ * next point), bit for bit. */
+SHL_TEST(simd_interp_lookahead_is_one_point_at_a_time)
+{
+    const double lo[3] = {-1.0, 0.25, -0.5}, hi[3] = {1.5, 1.0, 2.5};
+    const int lmaxes[3] = {0, 3, IP_LMAX};
+    static double pts[3 * IP_NP], one[3 * IP_NC * IP_NP], all[3 * IP_NC * IP_NP];
+    for (int i = 0; i < NISA; ++i)
+        for (int l = 0; l < 3; ++l) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmaxes[l]);
+            if (!ctx) continue;
+            const int nv = 3 * SHL_NCOEFFS(lmaxes[l]);
+            for (int storage = 0; storage < 2; ++storage)
+                for (int big = 0; big < 2; ++big) {
+                    int bpn;
+                    CHECK(shl_grid_bytes_per_node(lmaxes[l], storage ? SHL_GRID_DOUBLE : SHL_GRID_FLOAT, &bpn) == SHL_OK);
+                    const int r = (int)ceil(cbrt((double)SHL__INTERP_AHEAD_BYTES / bpn)) + 1;
+                    const int res[3] = {big ? r : 4, big ? r : 3, big ? r : 5};
+                    CHECK(((size_t)res[0] * res[1] * res[2] * bpn > SHL__INTERP_AHEAD_BYTES) == big);
+                    double h[3];
+                    for (int a = 0; a < 3; ++a) h[a] = (hi[a] - lo[a]) / (res[a] - 1);
+                    shl_grid *g = NULL;
+                    CHECK(shl_grid_create(ctx, lo, hi, res, storage ? SHL_GRID_DOUBLE : SHL_GRID_FLOAT, &g) == SHL_OK);
+                    rng_t rng = {(uint64_t)(70 + l)};
+                    random_nodes(&rng, &g, 1, res, h, nv / 3);
+                    interp_points(&rng, lo, hi, res, pts);
+                    for (int m = 0; m < 3; ++m) {
+                        for (int p = 0; p < IP_NP; ++p)
+                            CHECK(shl_grid_interp(g, m, 1.5, 1, pts + 3 * p, one + (size_t)nv * p, 1) == SHL_OK);
+                        const size_t bytes = sizeof(double) * nv * IP_NP;
+                        CHECK(shl_grid_interp(g, m, 1.5, IP_NP, pts, all, 1) == SHL_OK);
+                        CHECK(memcmp(one, all, bytes) == 0);
+                        memset(all, 0, bytes);
+                        CHECK(shl_grid_interp(g, m, 1.5, 101, pts + 3 * 7, all + (size_t)nv * 7, 1) == SHL_OK);
+                        CHECK(memcmp(one + (size_t)nv * 7, all + (size_t)nv * 7, sizeof(double) * nv * 101) == 0);
+                        CHECK(shl_grid_interp(g, m, 1.5, IP_NP, pts, all, 3) == SHL_OK);
+                        CHECK(memcmp(one, all, bytes) == 0);
+                    }
+                    shl_grid_destroy(g);
+                }
+            shl_ctx_destroy(ctx);
+        }
+}
+
 /* Double storage runs the reference on every ISA: identical results. */
 SHL_TEST(simd_interp_double_storage_is_reference)
 {

@@ -158,7 +158,7 @@ typedef struct {
     int failed[256];
 } gather_job;
 
-static void gather_block(void *arg, long begin, long end, int worker)
+static void gather_block(void *arg, int worker, long begin, long end)
 {
     gather_job *j = arg;
     const mesh *g = &j->s->geom;
@@ -187,5 +187,82 @@ int hvl_gather(const scene *s, const hvl_set *h, const int *idx, long n, float *
     par_progress_end(j.prog);
     for (int w = 0; w < 256; ++w)
         if (j.failed[w]) return -1;
+    return 0;
+}
+
+/* ---- VPL and VSL baselines (HVL Table 2) ---------------------------------------- */
+
+double vpl_radiance(const shl_hvl *h, const double x[3], const double n[3])
+{
+    double w[3];
+    v3_sub(w, h->pos, x);
+    const double d2 = v3_dot(w, w), cx = v3_dot(n, w), cy = -v3_dot(h->normal, w);
+    if (!(d2 > 0) || cx <= 0 || cy <= 0) return 0.0;
+    return cx * cy / (d2 * d2 * M_PI * M_PI); /* cos_x cos_y / (pi^2 d^2), the cosines' 1/d folded in */
+}
+
+static unsigned long long splitmix(unsigned long long *s)
+{
+    unsigned long long z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+double vsl_radiance(const shl_hvl *h, const double x[3], const double n[3], int k, unsigned long long seed)
+{
+    double a[3], t[3], b[3];
+    v3_sub(a, h->pos, x);
+    const double d = v3_normalize(a);
+    if (!(d > 0) || k < 1) return 0.0;
+    const double sa = h->radius / d, ca = sa < 1 ? sqrt(1 - sa * sa) : 0.0, omega = 2 * M_PI * (1 - ca);
+    v3_basis(a, t, b);
+    double sum = 0.0;
+    for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) { /* uniform on the cone: cos = 1 - u (1 - cos a), pdf 1 / omega */
+            const double u = (i + (splitmix(&seed) >> 11) * 0x1p-53) / k, v = (j + (splitmix(&seed) >> 11) * 0x1p-53) / k;
+            const double c = 1 - u * (1 - ca), s = sqrt(fmax(0.0, 1 - c * c)), ph = 2 * M_PI * v;
+            double w[3];
+            for (int q = 0; q < 3; ++q) w[q] = c * a[q] + s * (cos(ph) * t[q] + sin(ph) * b[q]);
+            const double cx = v3_dot(n, w), cy = -v3_dot(h->normal, w);
+            if (cx > 0 && cy > 0) sum += cx * cy;
+        }
+    return sum * omega / (k * k) / (M_PI * M_PI) / (M_PI * h->radius * h->radius); /* Hasan 2009 Eq. 5 */
+}
+
+typedef struct {
+    const scene *s;
+    const hvl_set *h;
+    int k;
+    const int *idx;
+    float *indirect;
+    par_progress *prog;
+} vl_job;
+
+static void vl_block(void *arg, int worker, long begin, long end)
+{
+    (void)worker;
+    vl_job *j = arg;
+    const mesh *g = &j->s->geom;
+    for (long i = begin; i < end; ++i) {
+        const long v = j->idx ? j->idx[i] : i;
+        const double *x = g->pos + 3 * v, *n = g->nrm + 3 * v, *alb = j->s->mats[g->mat[v]].albedo;
+        double sum[3] = {0, 0, 0};
+        for (int q = 0; q < j->h->count; ++q) {
+            const double r = j->k ? vsl_radiance(&j->h->h[q], x, n, j->k, (unsigned long long)v * 1000003ull + (unsigned)q)
+                                  : vpl_radiance(&j->h->h[q], x, n);
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += r * j->h->rgb[3 * q + ch];
+        }
+        for (int ch = 0; ch < 3; ++ch) j->indirect[3 * v + ch] += (float)(alb[ch] * sum[ch]);
+    }
+    par_progress_add(j->prog, end - begin);
+}
+
+int vl_gather(const scene *s, const hvl_set *h, int vsl_k, const int *idx, long n, float *indirect, int nthreads)
+{
+    const long count = idx ? n : s->geom.nv;
+    vl_job j = {s, h, vsl_k, idx, indirect, par_progress_begin(vsl_k ? "VSL gather" : "VPL gather", count)};
+    par_for(count, 64, nthreads, vl_block, &j);
+    par_progress_end(j.prog);
     return 0;
 }

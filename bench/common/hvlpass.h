@@ -26,4 +26,18 @@ int hvl_distribute(const scene *s, const bvh *b, int recv_lmax, hvl_set *out);
 int hvl_gather(const scene *s, const hvl_set *h, const int *idx, long n, float *indirect, int nthreads);
 void hvl_free(hvl_set *h);
 
+/* The baselines of HVL Table 2 on the same virtual lights (position, normal, coloured power,
+ * radius), unshadowed like the HVLs.  Both virtual and receiving surfaces are Lambertian with
+ * unit albedo here (f = 1 / pi; the gathers scale by the power's colour and the receiver's albedo).
+ * VPL (Keller 1997): Phi cos_x cos_y / (pi^2 d^2) per unit power, unclamped.
+ * VSL (Hasan et al. 2009, Eq. 5): Phi / (pi r^2) * integral over the cone the sphere subtends of
+ * (1/pi) cos+_x (1/pi) cos+_y dw, estimated with samples = k^2 jittered strata of uniform cone
+ * sampling (the cone is the hemisphere about the direction to the centre when x is inside the
+ * sphere); seed picks the jitter (deterministic). */
+double vpl_radiance(const shl_hvl *h, const double x[3], const double n[3]);
+double vsl_radiance(const shl_hvl *h, const double x[3], const double n[3], int k, unsigned long long seed);
+/* indirect[3 * v + c] += the virtual lights' radiance at idx[0 .. n) (NULL: every vertex);
+ * vsl_k 0: VPL, else VSL with vsl_k^2 samples per light and vertex.  0 or -1. */
+int vl_gather(const scene *s, const hvl_set *h, int vsl_k, const int *idx, long n, float *indirect, int nthreads);
+
 #endif

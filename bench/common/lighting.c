@@ -150,12 +150,16 @@ void lighting_free(lighting *L)
     free(L);
 }
 
+enum { BLOCK = 64 };
+
 typedef struct {
     const lighting *L;
     const double *pts;
     float *coef;
     par_progress *prog;
-    int failed[256]; /* per worker */
+    double *out, *acc; /* per worker: 3 nc BLOCK outputs, 3 SHL__ZH_BLOCK accumulators */
+    float *pf;         /* per worker: 3 BLOCK float positions */
+    int failed[SHL_MAX_THREADS]; /* per worker */
 } eval_job;
 
 static uint64_t mix64(uint64_t x)
@@ -232,6 +236,50 @@ static void monte_carlo(const lighting *L, long p, const double x[3], double *rg
     for (int k = 0; k < 3 * nc; ++k) rgb[k] /= (double)N;
 }
 
+/* Stratified Monte Carlo at x (polygon lights): each fan triangle t of each lit light gets
+ * k_t^2 ~ N x its share of the power, jittered strata of the unit square mapped onto the triangle
+ * by the area-preserving (u, v) -> (1 - sqrt u) A + sqrt u (1 - v) B + sqrt u v C; estimate
+ * area_t / k_t^2 sum L cos_l Y(w) / r^2 (the integrand is smooth over a light, so the error falls
+ * about as N^-1 instead of N^-1/2). */
+static void monte_carlo_stratified(const lighting *L, long p, const double x[3], double *rgb)
+{
+    const scene *s = L->s;
+    const int nc = L->nc;
+    const double total = L->cdf[s->npolys + s->nspheres - 1];
+    uint64_t st = mix64((uint64_t)p * 0x632BE59BD9B4E019ull + 1);
+    double y[SHL_NCOEFFS(SHL_LMAX_MAX)];
+    memset(rgb, 0, sizeof(double) * 3 * (size_t)nc);
+    for (int j = 0; j < s->npolys; ++j) {
+        const scene_polygon *q = &s->polys[j];
+        if (!lit_side(L, j, x)) continue;
+        const double share = (L->cdf[j] - (j ? L->cdf[j - 1] : 0.0)) / total;
+        for (int t = 1; t + 1 < q->n; ++t) {
+            double e1[3], e2[3], c[3];
+            v3_sub(e1, q->v + 3 * t, q->v);
+            v3_sub(e2, q->v + 3 * (t + 1), q->v);
+            v3_cross(c, e1, e2);
+            const double area = 0.5 * v3_len(c);
+            const int k = (int)fmax(1.0, ceil(sqrt((double)L->m.mc_samples * share * area / L->area[j])));
+            double acc[SHL_NCOEFFS(SHL_LMAX_MAX)];
+            memset(acc, 0, sizeof(double) * (size_t)nc);
+            for (int a = 0; a < k; ++a)
+                for (int b = 0; b < k; ++b) {
+                    const double u = (a + next01(&st)) / k, v = (b + next01(&st)) / k, su = sqrt(u);
+                    double w[3];
+                    for (int i = 0; i < 3; ++i) w[i] = q->v[i] + su * (1 - v) * e1[i] + su * v * e2[i] - x[i];
+                    const double r2 = v3_dot(w, w);
+                    if (!(r2 > 0)) continue;
+                    v3_scale(w, w, 1.0 / sqrt(r2));
+                    const double f = fabs(v3_dot(w, L->normal[j])) / r2;
+                    shl_eval_basis(L->lmax, w, y);
+                    for (int i = 0; i < nc; ++i) acc[i] += f * y[i];
+                }
+            for (int ch = 0; ch < 3; ++ch)
+                for (int i = 0; i < nc; ++i) rgb[ch * nc + i] += q->rgb[ch] * area / (k * k) * acc[i];
+        }
+    }
+}
+
 /* Monomial-moment ZH per light, accumulated per colour, one reconstruction per colour (as lights.c). */
 static void monomial(const lighting *L, const double x[3], double *rgb, double *acc)
 {
@@ -252,17 +300,14 @@ static void monomial(const lighting *L, const double x[3], double *rgb, double *
     for (int ch = 0; ch < 3; ++ch) shl__zh_to_sh(lmax, acc + ch * SHL__ZH_BLOCK, rgb + ch * nc);
 }
 
-enum { BLOCK = 64 };
-
-static void eval_block(void *arg, long begin, long end, int worker)
+static void eval_block(void *arg, int worker, long begin, long end)
 {
     eval_job *j = arg;
     const lighting *L = j->L;
     const int nc = L->nc, nb = (int)(end - begin);
     const double *pts = j->pts + 3 * begin;
-    double *out = malloc(sizeof(double) * 3 * (size_t)nc * BLOCK), *acc = malloc(sizeof(double) * 3 * SHL__ZH_BLOCK);
-    float *pf = malloc(sizeof(float) * 3 * BLOCK);
-    if (!out || !acc || !pf) goto fail;
+    double *out = j->out + 3 * (size_t)nc * BLOCK * (size_t)worker, *acc = j->acc + 3 * SHL__ZH_BLOCK * (size_t)worker;
+    float *pf = j->pf + 3 * BLOCK * (size_t)worker;
     switch (L->m.kind) {
     case LM_ANALYTIC:
         if (shl_lights_eval_batch(L->ctx, L->set, nb, pts, out, NULL) != SHL_OK) goto fail;
@@ -276,7 +321,9 @@ static void eval_block(void *arg, long begin, long end, int worker)
         if (shl_grid_interp(L->grid, L->m.interp, L->m.taylor_b, nb, pts, out, 1) != SHL_OK) goto fail;
         break;
     case LM_MC:
-        for (int p = 0; p < nb; ++p) monte_carlo(L, begin + p, pts + 3 * p, out + 3 * (size_t)nc * p);
+        for (int p = 0; p < nb; ++p)
+            (L->m.mc_stratified && L->s->nspheres == 0 ? monte_carlo_stratified : monte_carlo)(L, begin + p, pts + 3 * p,
+                                                                                              out + 3 * (size_t)nc * p);
         break;
     case LM_MONOMIAL:
         for (int p = 0; p < nb; ++p) {
@@ -317,25 +364,28 @@ static void eval_block(void *arg, long begin, long end, int worker)
     if (L->m.kind != LM_ANALYTIC_F)
         for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) j->coef[3 * (size_t)nc * (size_t)begin + k] = (float)out[k];
     par_progress_add(j->prog, nb);
-    free(out);
-    free(acc);
-    free(pf);
     return;
 fail:
     j->failed[worker] = 1;
-    free(out);
-    free(acc);
-    free(pf);
 }
 
 int lighting_eval(const lighting *L, long n, const double *pts, float *coef, int nthreads)
 {
     char name[128] = "lighting: ";
     lighting_name(&L->m, name + strlen(name), sizeof name - strlen(name));
-    eval_job j = {L, pts, coef, par_progress_begin(name, n), {0}};
-    par_for(n, BLOCK, nthreads, eval_block, &j);
-    par_progress_end(j.prog);
-    for (int w = 0; w < 256; ++w)
-        if (j.failed[w]) return -1;
-    return 0;
+    const int nw = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
+    eval_job j = {L, pts, coef, NULL, malloc(sizeof(double) * 3 * (size_t)L->nc * BLOCK * (size_t)nw),
+                  malloc(sizeof(double) * 3 * SHL__ZH_BLOCK * (size_t)nw), malloc(sizeof(float) * 3 * BLOCK * (size_t)nw), {0}};
+    int st = j.out && j.acc && j.pf ? 0 : -1;
+    if (!st) {
+        j.prog = par_progress_begin(name, n);
+        par_for(n, BLOCK, nw, eval_block, &j);
+        par_progress_end(j.prog);
+        for (int w = 0; w < nw; ++w)
+            if (j.failed[w]) st = -1;
+    }
+    free(j.out);
+    free(j.acc);
+    free(j.pf);
+    return st;
 }

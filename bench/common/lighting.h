@@ -28,6 +28,8 @@ typedef struct {
     int grid_res, interp, grid_storage; /* GRID: resolution, SHL_INTERP_*, SHL_GRID_FLOAT / DOUBLE */
     double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR; SINGLE / TAYLOR1 with npoints > 1 */
     long mc_samples;                    /* MC */
+    int mc_stratified;                  /* MC, polygon lights only: about mc_samples jittered strata split over
+                                           the lights' fan triangles by power, instead of iid area samples */
     int npoints;                        /* SINGLE, TAYLOR1: number of samples (0 means 1) */
     double point[LIGHTING_MAX_SAMPLES][3]; /* SINGLE, TAYLOR1: where the samples are taken */
 } lighting_method;

@@ -10,64 +10,31 @@ int par_threads(void)
     const char *env = getenv("SHLIGHT_THREADS");
     if (env) {
         const int n = atoi(env);
-        if (n >= 1 && n <= 256) return n;
+        if (n >= 1 && n <= SHL_MAX_THREADS) return n;
     }
     const long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n < 1 ? 1 : n > 256 ? 256 : (int)n;
+    return n < 1 ? 1 : n > SHL_MAX_THREADS ? SHL_MAX_THREADS : (int)n;
 }
 
-typedef struct {
-    pthread_mutex_t lock;
-    long next, n, grain;
-    par_fn fn;
-    void *arg;
-} loop;
-
-typedef struct {
-    loop *lp;
-    int worker;
-} worker_arg;
-
-static void run(loop *lp, int worker)
+/* One worker, or no thread could be created: the chunks in order on the calling thread. */
+static void serial(long n, long grain, par_fn fn, void *arg)
 {
-    for (;;) {
-        pthread_mutex_lock(&lp->lock);
-        const long begin = lp->next;
-        lp->next = begin + lp->grain < lp->n ? begin + lp->grain : lp->n;
-        const long end = lp->next;
-        pthread_mutex_unlock(&lp->lock);
-        if (begin >= end) return;
-        lp->fn(lp->arg, begin, end, worker);
-    }
-}
-
-static void *thread_main(void *p)
-{
-    worker_arg *w = p;
-    run(w->lp, w->worker);
-    return NULL;
+    for (long b = 0; b < n; b += grain) fn(arg, 0, b, n - b < grain ? n : b + grain);
 }
 
 int par_for(long n, long grain, int nthreads, par_fn fn, void *arg)
 {
     if (n <= 0) return 0;
     if (grain < 1) grain = 1;
-    if ((n + grain - 1) / grain < nthreads) nthreads = (int)((n + grain - 1) / grain);
-    if (nthreads > 256) nthreads = 256;
-    loop lp = {PTHREAD_MUTEX_INITIALIZER, 0, n, grain, fn, arg};
-    pthread_t tid[256];
-    worker_arg wa[256];
-    int started = 0;
-    for (int t = 1; t < nthreads; ++t) {
-        wa[t].lp = &lp;
-        wa[t].worker = t;
-        if (pthread_create(&tid[t], NULL, thread_main, &wa[t]) != 0) break;
-        started = t;
+    nthreads = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
+    if (shl__parallel_workers(n, grain, nthreads) > 1) {
+        /* SHL_ETHREAD means fn never ran (src/parallel.h): running it again here is safe */
+        if (shl__parallel_for(n, grain, nthreads, fn, arg) == SHL_OK) return 0;
+        serial(n, grain, fn, arg);
+        return -1;
     }
-    run(&lp, 0);
-    for (int t = 1; t <= started; ++t) pthread_join(tid[t], NULL);
-    pthread_mutex_destroy(&lp.lock);
-    return nthreads > 1 && started == 0 ? -1 : 0;
+    serial(n, grain, fn, arg);
+    return 0;
 }
 
 struct par_progress {

@@ -1,16 +1,22 @@
-/* Harness parallel loop on pthreads, and progress reports on stderr. */
+/* Harness parallel loop: the library's own (shl__parallel_for of src/parallel.h, an internal
+ * header: the harness links the static archive, never the shared library), with chunks of at
+ * most `grain` items on every path; and progress reports on stderr. */
 #ifndef SHL_BENCH_PARFOR_H
 #define SHL_BENCH_PARFOR_H
 
-/* fn processes items [begin, end) as worker `worker` (0 <= worker < nthreads). */
-typedef void (*par_fn)(void *arg, long begin, long end, int worker);
+#include "parallel.h"
 
-/* Worker count: $SHLIGHT_THREADS if set (1..256), else the online CPU count. */
+/* fn processes items [begin, end), end - begin <= grain, as worker `worker`
+ * (0 <= worker < nthreads): the library's shl__range_fn. */
+typedef shl__range_fn par_fn;
+
+/* Worker count: $SHLIGHT_THREADS if set (1..SHL_MAX_THREADS), else the online CPU count. */
 int par_threads(void);
 
 /* Run fn over [0, n) in chunks of `grain` items claimed in order by nthreads
- * workers (the caller is worker 0).  Returns 0, or -1 if no thread could be
- * created (the loop then ran on the calling thread alone). */
+ * workers (the caller is worker 0; nthreads is clamped to 1..SHL_MAX_THREADS).
+ * Returns 0, or -1 if a thread could not be created (the loop then ran on the
+ * calling thread alone, chunk by chunk). */
 int par_for(long n, long grain, int nthreads, par_fn fn, void *arg);
 
 /* A progress line "name: 42%" on stderr, shown only once the task has run

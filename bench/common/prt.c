@@ -164,7 +164,7 @@ typedef struct {
     const double *lobe; /* per material: lmax+1 ZH (glossy materials) */
 } shade_job;
 
-static void shade_block(void *arg, long begin, long end, int worker)
+static void shade_block(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const shade_job *j = arg;
@@ -177,11 +177,15 @@ static void shade_block(void *arg, long begin, long end, int worker)
         const scene_material *mt = &s->mats[s->geom.mat[v]];
         const float *L = p->coef + (size_t)i * 3 * ncl, *T = p->T.t + (size_t)v * nct;
         float *out = p->vrad + 3 * v;
-        for (int ch = 0; ch < 3; ++ch) {
-            double d = 0.0;
-            for (int k = 0; k < nc; ++k) d += (double)L[ch * ncl + k] * T[k];
-            out[ch] = (float)(mt->albedo[ch] * d);
+        double d0 = 0.0, d1 = 0.0, d2 = 0.0; /* three independent sums, each in the order of k */
+        for (int k = 0; k < nc; ++k) {
+            d0 += (double)L[k] * T[k];
+            d1 += (double)L[ncl + k] * T[k];
+            d2 += (double)L[2 * ncl + k] * T[k];
         }
+        out[0] = (float)(mt->albedo[0] * d0);
+        out[1] = (float)(mt->albedo[1] * d1);
+        out[2] = (float)(mt->albedo[2] * d2);
         if (j->glossy && mt->kind != MAT_DIFFUSE) {
             const double *x = s->geom.pos + 3 * v, *n = s->geom.nrm + 3 * v;
             double wo[3], r[3];
@@ -192,11 +196,15 @@ static void shade_block(void *arg, long begin, long end, int worker)
                 v3_scale(r, n, 2 * c);
                 v3_sub(r, r, wo);
                 shl_zh_to_sh(j->lmax, j->lobe + (size_t)s->geom.mat[v] * (SHL_LMAX_MAX + 1), r, sh);
-                for (int ch = 0; ch < 3; ++ch) {
-                    double d = 0.0;
-                    for (int k = 0; k < ncl; ++k) d += (double)L[ch * ncl + k] * sh[k];
-                    out[ch] += (float)(mt->ks * d);
+                double g0 = 0.0, g1 = 0.0, g2 = 0.0;
+                for (int k = 0; k < ncl; ++k) {
+                    g0 += (double)L[k] * sh[k];
+                    g1 += (double)L[ncl + k] * sh[k];
+                    g2 += (double)L[2 * ncl + k] * sh[k];
                 }
+                out[0] += (float)(mt->ks * g0);
+                out[1] += (float)(mt->ks * g1);
+                out[2] += (float)(mt->ks * g2);
             }
         }
         if (p->indirect)

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { TILE = 32 };
+enum { TILE = 32, CHUNK = 4096 };
 
 int framebuf_init(framebuf *fb, int w, int h)
 {
@@ -16,6 +16,10 @@ int framebuf_init(framebuf *fb, int w, int h)
     fb->tri = malloc(sizeof(int) * n);
     fb->bary = malloc(sizeof(float) * 3 * n);
     fb->back = malloc(n);
+    for (int i = 0; i < 4; ++i) {
+        fb->work[i] = NULL;
+        fb->work_len[i] = 0;
+    }
     if (fb->depth && fb->mesh && fb->tri && fb->bary && fb->back) return 0;
     framebuf_free(fb);
     return -1;
@@ -28,6 +32,7 @@ void framebuf_free(framebuf *fb)
     free(fb->tri);
     free(fb->bary);
     free(fb->back);
+    for (int i = 0; i < 4; ++i) free(fb->work[i]);
     memset(fb, 0, sizeof *fb);
 }
 
@@ -41,13 +46,24 @@ typedef struct {
     unsigned char back;
 } rtri;
 
+/* A vertex seen by the camera: screen position (valid when z >= znear) and view depth. */
+typedef struct {
+    double sx, sy, z;
+} pvert;
+
 typedef struct {
     const camera *cam;
     const raster_mesh *meshes;
     int nmeshes, w, h;
     double right[3], up[3], fwd[3], focal, znear;
     long *first_tri;  /* prefix of the meshes' triangle counts (global triangle index) */
-    long *count;      /* records per global triangle, then their prefix sum */
+    long *first_vert; /* prefix of the meshes' vertex counts (index into pv) */
+    pvert *pv;        /* every mesh's vertices, projected once per draw */
+    long nchunks;
+    rtri **chunk_recs; /* per chunk of CHUNK global triangles: its records, in triangle order */
+    long *chunk_count; /* their number, then the prefix sum */
+    rtri *scratch;     /* per worker: 2 CHUNK records */
+    pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     rtri *recs;
     long nrecs;
     int *tile_first, *tile_list, tiles_x, tiles_y;
@@ -59,52 +75,94 @@ typedef struct {
     float b[3];
 } cvert;
 
-/* Clip the triangle to forward >= znear, project, and emit up to 2 records; returns the count. */
-static int setup_tri(const ctx_t *c, int m, int t, rtri *out)
+static void view_space(const ctx_t *c, const double *x, double v[3])
+{
+    double d[3];
+    v3_sub(d, x, c->cam->eye);
+    v3_set(v, v3_dot(d, c->right), v3_dot(d, c->up), v3_dot(d, c->fwd));
+}
+
+static double screen_x(const ctx_t *c, const double v[3]) { return 0.5 * c->w + c->focal * v[0] / v[2]; }
+static double screen_y(const ctx_t *c, const double v[3]) { return 0.5 * c->h - c->focal * v[1] / v[2]; }
+
+static void project_job(void *arg, int worker, long begin, long end)
+{
+    (void)worker;
+    ctx_t *c = arg;
+    int m = 0;
+    for (long g = begin; g < end; ++g) {
+        while (g >= c->first_vert[m + 1]) ++m;
+        double v[3];
+        view_space(c, c->meshes[m].pos + 3 * (g - c->first_vert[m]), v);
+        pvert *q = &c->pv[g];
+        q->z = v[2];
+        q->sx = v[2] >= c->znear ? screen_x(c, v) : 0.0;
+        q->sy = v[2] >= c->znear ? screen_y(c, v) : 0.0;
+    }
+}
+
+/* Clip the triangle to forward >= znear, project, and emit up to 2 records; returns the count.
+ * pv: its corners' projections (project_job); a triangle wholly in front of the near plane
+ * (the common case) uses them, the same values the clipping path computes. */
+static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
 {
     const raster_mesh *rm = &c->meshes[m];
-    cvert in[3], poly[4];
+    const int *tv = rm->tri + 3 * (size_t)t;
+    double sx[4], sy[4], z[4];
+    float b[4][3];
     int n = 0;
-    for (int k = 0; k < 3; ++k) {
-        double d[3];
-        v3_sub(d, rm->pos + 3 * rm->tri[3 * t + k], c->cam->eye);
-        v3_set(in[k].v, v3_dot(d, c->right), v3_dot(d, c->up), v3_dot(d, c->fwd));
-        in[k].b[0] = in[k].b[1] = in[k].b[2] = 0.0f;
-        in[k].b[k] = 1.0f;
-    }
-    for (int k = 0; k < 3; ++k) { /* Sutherland-Hodgman against one plane */
-        const cvert *a = &in[k], *b = &in[(k + 1) % 3];
-        const int ina = a->v[2] >= c->znear, inb = b->v[2] >= c->znear;
-        if (ina) poly[n++] = *a;
-        if (ina != inb) {
-            const double s = (c->znear - a->v[2]) / (b->v[2] - a->v[2]);
-            cvert *q = &poly[n++];
-            for (int i = 0; i < 3; ++i) {
-                q->v[i] = a->v[i] + s * (b->v[i] - a->v[i]);
-                q->b[i] = (float)(a->b[i] + s * (b->b[i] - a->b[i]));
+    if (pv[0].z >= c->znear && pv[1].z >= c->znear && pv[2].z >= c->znear) {
+        for (int k = 0; k < 3; ++k) {
+            sx[k] = pv[k].sx;
+            sy[k] = pv[k].sy;
+            z[k] = pv[k].z;
+            b[k][0] = b[k][1] = b[k][2] = 0.0f;
+            b[k][k] = 1.0f;
+        }
+        n = 3;
+    } else {
+        cvert in[3], poly[4];
+        for (int k = 0; k < 3; ++k) {
+            view_space(c, rm->pos + 3 * tv[k], in[k].v);
+            in[k].b[0] = in[k].b[1] = in[k].b[2] = 0.0f;
+            in[k].b[k] = 1.0f;
+        }
+        for (int k = 0; k < 3; ++k) { /* Sutherland-Hodgman against one plane */
+            const cvert *a = &in[k], *e = &in[(k + 1) % 3];
+            const int ina = a->v[2] >= c->znear, ine = e->v[2] >= c->znear;
+            if (ina) poly[n++] = *a;
+            if (ina != ine) {
+                const double s = (c->znear - a->v[2]) / (e->v[2] - a->v[2]);
+                cvert *q = &poly[n++];
+                for (int i = 0; i < 3; ++i) {
+                    q->v[i] = a->v[i] + s * (e->v[i] - a->v[i]);
+                    q->b[i] = (float)(a->b[i] + s * (e->b[i] - a->b[i]));
+                }
             }
         }
-    }
-    if (n < 3) return 0;
-    double sx[4], sy[4];
-    for (int k = 0; k < n; ++k) {
-        sx[k] = 0.5 * c->w + c->focal * poly[k].v[0] / poly[k].v[2];
-        sy[k] = 0.5 * c->h - c->focal * poly[k].v[1] / poly[k].v[2];
+        if (n < 3) return 0;
+        for (int k = 0; k < n; ++k) {
+            sx[k] = screen_x(c, poly[k].v);
+            sy[k] = screen_y(c, poly[k].v);
+            z[k] = poly[k].v[2];
+            memcpy(b[k], poly[k].b, sizeof b[k]);
+        }
     }
     int emitted = 0;
     for (int f = 1; f + 1 < n; ++f) {
         const int id[3] = {0, f, f + 1};
         double minx = 1e300, maxx = -1e300, miny = 1e300, maxy = -1e300;
         for (int k = 0; k < 3; ++k) {
-            minx = fmin(minx, sx[id[k]]);
-            maxx = fmax(maxx, sx[id[k]]);
-            miny = fmin(miny, sy[id[k]]);
-            maxy = fmax(maxy, sy[id[k]]);
+            minx = sx[id[k]] < minx ? sx[id[k]] : minx; /* finite coordinates: as fmin, fmax */
+            maxx = sx[id[k]] > maxx ? sx[id[k]] : maxx;
+            miny = sy[id[k]] < miny ? sy[id[k]] : miny;
+            maxy = sy[id[k]] > maxy ? sy[id[k]] : maxy;
         }
         const double x0 = fmax(0.0, ceil(minx - 0.5)), x1 = fmin((double)c->w, floor(maxx - 0.5) + 1.0);
         const double y0 = fmax(0.0, ceil(miny - 0.5)), y1 = fmin((double)c->h, floor(maxy - 0.5) + 1.0);
+        if (x0 >= x1 || y0 >= y1) continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
-        if (x0 >= x1 || y0 >= y1 || area == 0.0) continue;
+        if (area == 0.0) continue;
         if (out) {
             rtri *r = &out[emitted];
             const int swap = area < 0; /* orient to positive area; y points down, so front faces have area < 0 */
@@ -112,8 +170,8 @@ static int setup_tri(const ctx_t *c, int m, int t, rtri *out)
             for (int k = 0; k < 3; ++k) {
                 r->x[k] = sx[order[k]];
                 r->y[k] = sy[order[k]];
-                r->iw[k] = (float)(1.0 / poly[order[k]].v[2]);
-                memcpy(r->b[k], poly[order[k]].b, sizeof r->b[k]);
+                r->iw[k] = (float)(1.0 / z[order[k]]);
+                memcpy(r->b[k], b[order[k]], sizeof r->b[k]);
             }
             r->x0 = (int)x0;
             r->x1 = (int)x1;
@@ -136,30 +194,38 @@ static void global_to_local(const ctx_t *c, long g, int *m, int *t)
     *t = (int)(g - c->first_tri[k]);
 }
 
-static void count_job(void *arg, long begin, long end, int worker)
+/* Set up the triangles of chunks [begin, end) in one pass: the records go to the worker's
+ * scratch, then to a copy of exactly their size. */
+static void setup_job(void *arg, int worker, long begin, long end)
 {
-    (void)worker;
     ctx_t *c = arg;
-    for (long g = begin; g < end; ++g) {
-        int m, t;
-        global_to_local(c, g, &m, &t);
-        c->count[g] = setup_tri(c, m, t, NULL);
-    }
-}
-
-static void write_job(void *arg, long begin, long end, int worker)
-{
-    (void)worker;
-    ctx_t *c = arg;
-    for (long g = begin; g < end; ++g) {
-        int m, t;
-        global_to_local(c, g, &m, &t);
-        if (c->count[g + 1] > c->count[g]) setup_tri(c, m, t, c->recs + c->count[g]);
+    const long ntri = c->first_tri[c->nmeshes];
+    rtri *buf = c->scratch + 2 * CHUNK * (size_t)worker;
+    pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
+    for (long ch = begin; ch < end; ++ch) {
+        const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
+        long n = 0;
+        /* gather the corners first: a loop without data-dependent branches keeps many of
+         * these scattered loads in flight */
+        for (long g = g0; g < g1; ++g) {
+            int m, t;
+            global_to_local(c, g, &m, &t);
+            const int *tv = c->meshes[m].tri + 3 * (size_t)t;
+            const pvert *pv = c->pv + c->first_vert[m];
+            for (int k = 0; k < 3; ++k) corner[3 * (g - g0) + k] = pv[tv[k]];
+        }
+        for (long g = g0; g < g1; ++g) {
+            int m, t;
+            global_to_local(c, g, &m, &t);
+            n += setup_tri(c, m, t, corner + 3 * (g - g0), buf + n);
+        }
+        c->chunk_count[ch] = n; /* records but no copy: out of memory, seen by raster_draw */
+        if (n && (c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) memcpy(c->chunk_recs[ch], buf, sizeof(rtri) * (size_t)n);
     }
 }
 
 /* Rasterize the records binned to one tile, in record order (deterministic ties). */
-static void tile_job(void *arg, long begin, long end, int worker)
+static void tile_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
@@ -207,6 +273,18 @@ static void tile_job(void *arg, long begin, long end, int worker)
     }
 }
 
+/* fb->work[i] with at least `bytes` bytes (kept for the next draw), or NULL. */
+static void *work(framebuf *fb, int i, size_t bytes)
+{
+    if (bytes > fb->work_len[i]) {
+        free(fb->work[i]);
+        fb->work_len[i] = 0;
+        if (!(fb->work[i] = malloc(bytes))) return NULL;
+        fb->work_len[i] = bytes;
+    }
+    return fb->work[i];
+}
+
 int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int nmeshes, int nthreads)
 {
     const size_t npix = (size_t)fb->w * (size_t)fb->h;
@@ -234,20 +312,34 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.first_tri[0] = 0;
     for (int m = 0; m < nmeshes; ++m) c.first_tri[m + 1] = c.first_tri[m] + meshes[m].nt;
     const long ntri = c.first_tri[nmeshes];
-    c.count = malloc(sizeof(long) * (size_t)(ntri + 1));
-    if (!c.count) goto done;
-    par_for(ntri, 4096, nthreads, count_job, &c);
+    c.first_vert = malloc(sizeof(long) * (size_t)(nmeshes + 1));
+    if (!c.first_vert) goto done;
+    c.first_vert[0] = 0;
+    for (int m = 0; m < nmeshes; ++m) c.first_vert[m + 1] = c.first_vert[m] + meshes[m].nv;
+    const long nchunks = c.nchunks = (ntri + CHUNK - 1) / CHUNK;
+    const int nw = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
+    c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
+    c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
+    c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
+    c.scratch = work(fb, 1, sizeof(rtri) * 2 * CHUNK * (size_t)nw);
+    c.corners = work(fb, 3, sizeof(pvert) * 3 * CHUNK * (size_t)nw);
+    if (!c.pv || !c.chunk_recs || !c.chunk_count || !c.scratch || !c.corners) goto done;
+    par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
+    par_for(nchunks, 1, nw, setup_job, &c);
     long sum = 0;
-    for (long g = 0; g < ntri; ++g) {
-        const long k = c.count[g];
-        c.count[g] = sum;
+    for (long ch = 0; ch < nchunks; ++ch) {
+        const long k = c.chunk_count[ch];
+        if (k && !c.chunk_recs[ch]) goto done;
+        c.chunk_count[ch] = sum;
         sum += k;
     }
-    c.count[ntri] = sum;
+    c.chunk_count[nchunks] = sum;
     c.nrecs = sum;
-    c.recs = malloc(sizeof(rtri) * (size_t)(sum ? sum : 1));
+    c.recs = work(fb, 2, sizeof(rtri) * (size_t)(sum ? sum : 1));
     if (!c.recs) goto done;
-    par_for(ntri, 4096, nthreads, write_job, &c);
+    for (long ch = 0; ch < nchunks; ++ch)
+        if (c.chunk_recs[ch])
+            memcpy(c.recs + c.chunk_count[ch], c.chunk_recs[ch], sizeof(rtri) * (size_t)(c.chunk_count[ch + 1] - c.chunk_count[ch]));
     c.tiles_x = (fb->w + TILE - 1) / TILE;
     c.tiles_y = (fb->h + TILE - 1) / TILE;
     const int ntiles = c.tiles_x * c.tiles_y;
@@ -278,8 +370,11 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     st = 0;
 done:
     free(c.first_tri);
-    free(c.count);
-    free(c.recs);
+    free(c.first_vert);
+    if (c.chunk_recs)
+        for (long ch = 0; ch < c.nchunks; ++ch) free(c.chunk_recs[ch]);
+    free(c.chunk_recs);
+    free(c.chunk_count);
     free(c.tile_first);
     free(c.tile_list);
     return st;
@@ -292,7 +387,7 @@ typedef struct {
     float *rgb;
 } resolve_t;
 
-static void resolve_job(void *arg, long begin, long end, int worker)
+static void resolve_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const resolve_t *r = arg;

@@ -6,6 +6,8 @@
 #ifndef SHL_BENCH_RASTER_H
 #define SHL_BENCH_RASTER_H
 
+#include <stddef.h>
+
 typedef struct {
     double eye[3], target[3], up[3];
     double fov_deg; /* vertical field of view */
@@ -24,6 +26,8 @@ typedef struct {
     int *mesh, *tri;       /* mesh index and triangle per pixel (-1: background) */
     float *bary;           /* 3 per pixel: weights of the triangle's vertices */
     unsigned char *back;   /* 1: the triangle is seen from behind */
+    void *work[4];         /* raster_draw's buffers, kept from one draw to the next */
+    size_t work_len[4];    /* their sizes in bytes */
 } framebuf;
 
 int framebuf_init(framebuf *fb, int w, int h); /* 0 or -1 */

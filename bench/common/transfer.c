@@ -34,7 +34,7 @@ typedef struct {
     par_progress *prog;
 } job_t;
 
-static void unshadowed_job(void *arg, long begin, long end, int worker)
+static void unshadowed_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const job_t *j = arg;
@@ -69,7 +69,7 @@ static double radical_inverse2(uint32_t i)
  * cosine-weighted (pdf cos/pi), so unoccluded vertices get the exact unshadowed T.
  * Every vertex uses the same Hammersley set in its tangent frame: the estimation
  * error varies smoothly over the surface instead of as per-vertex noise. */
-static void shadowed_job(void *arg, long begin, long end, int worker)
+static void shadowed_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     const job_t *j = arg;

@@ -1,0 +1,124 @@
+/* Hessian cost (issue 19): shl_polygon_hess / shl_polygon and shl_sphere_hess / shl_sphere,
+ * with the gradient calls for reference, at lmax 4, 8, 14, 30, all ratios from one run
+ * (one core, scalar double; minimum of 31 timed repetitions of ~2 ms each).  The issue's
+ * target is shl_polygon_hess <= 2.5x shl_polygon at lmax 8.  Also one light set of
+ * 4 quads and 2 spheres: shl_lights_eval_hess / shl_lights_eval (with gradients).
+ * CSV: build/bench/bench_hess.csv (-o overrides); --help. */
+#include "shlight.h"
+#include "util.h"
+#include <math.h>
+#include <stdlib.h>
+
+enum { NPTS = 64 };
+
+typedef struct {
+    const shl_ctx *ctx;
+    const shl_lights *set;
+    int n;
+    double verts[3 * 4], center[3], radius;
+    double pts[NPTS][3];
+    long inner;
+} job;
+
+static double cbuf[3 * SHL_NCOEFFS(SHL_LMAX_MAX)], gbuf[9 * SHL_NCOEFFS(SHL_LMAX_MAX)],
+    hbuf[18 * SHL_NCOEFFS(SHL_LMAX_MAX)];
+
+#define RUNNER(name, call)                                                                                             \
+    static void name(void *p)                                                                                          \
+    {                                                                                                                  \
+        job *j = p;                                                                                                    \
+        double acc = 0;                                                                                                \
+        for (long i = 0; i < j->inner; ++i) {                                                                          \
+            const double *x = j->pts[i % NPTS];                                                                        \
+            call;                                                                                                      \
+            acc += cbuf[0];                                                                                            \
+        }                                                                                                              \
+        bench_sink += acc;                                                                                             \
+    }
+RUNNER(run_poly, shl_polygon(j->ctx, x, j->verts, j->n, cbuf))
+RUNNER(run_poly_grad, shl_polygon_grad(j->ctx, x, j->verts, j->n, cbuf, gbuf))
+RUNNER(run_poly_hess, shl_polygon_hess(j->ctx, x, j->verts, j->n, cbuf, gbuf, hbuf))
+RUNNER(run_sphere, shl_sphere(j->ctx, x, j->center, j->radius, cbuf))
+RUNNER(run_sphere_grad, shl_sphere_grad(j->ctx, x, j->center, j->radius, cbuf, gbuf))
+RUNNER(run_sphere_hess, shl_sphere_hess(j->ctx, x, j->center, j->radius, cbuf, gbuf, hbuf))
+RUNNER(run_set_grad, shl_lights_eval(j->ctx, j->set, x, cbuf, gbuf))
+RUNNER(run_set_hess, shl_lights_eval_hess(j->ctx, j->set, x, cbuf, gbuf, hbuf))
+
+static double timed(void (*fn)(void *), job *j)
+{
+    j->inner = 1;
+    const double t0 = bench_now();
+    long n = 0;
+    while (bench_now() - t0 < 0.005) { fn(j); ++n; }
+    j->inner = (long)fmax(1.0, 0.002 * n / (bench_now() - t0));
+    return bench_run(fn, j, j->inner, 31).min; /* short calls, many: the minimum dodges preemption under load */
+}
+
+int main(int argc, char **argv)
+{
+    const char *csv_path = "build/bench/bench_hess.csv";
+    const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_hess.csv)"}};
+    const bench_cli cli = {
+        "bench_hess", "[-o FILE]",
+        "Cost of the analytic SH Hessians (issue 19), one core, scalar double: shl_polygon_hess against\n"
+        "shl_polygon and shl_polygon_grad (triangle), shl_sphere_hess against shl_sphere and shl_sphere_grad,\n"
+        "at lmax 4, 8, 14, 30, and a light set (4 quads, 2 spheres) with shl_lights_eval_hess against\n"
+        "shl_lights_eval with gradients.  Ratios within one run.  About 6 s on an idle 2-core machine.\n"
+        "Writes a Markdown table to stdout and one CSV row per table row to the CSV file.",
+        opts, 1, 0};
+    bench_parse(&cli, argc, argv, NULL);
+    FILE *csv = bench_create(csv_path, "w");
+    if (!csv) return 1;
+    char load[128];
+    bench_loadavg(load, sizeof load);
+    bench_print_machine(stdout);
+    printf("load average at start: %s\n", load);
+    fprintf(csv, "light,lmax,ns_coeffs,ns_grad,ns_hess,hess_over_coeffs,hess_over_grad\n");
+    static job j;
+    const double tri[9] = {-0.4, -0.3, 1.2, 0.6, -0.2, 1.0, 0.1, 0.7, 1.4};
+    for (int k = 0; k < 9; ++k) j.verts[k] = tri[k];
+    j.n = 3;
+    j.center[0] = 0.3, j.center[1] = 0.2, j.center[2] = 2.0, j.radius = 0.4;
+    srand(1);
+    for (int p = 0; p < NPTS; ++p)
+        for (int k = 0; k < 3; ++k) j.pts[p][k] = 2.0 * rand() / RAND_MAX - 1.0;
+    shl_lights *set;
+    shl_lights_create(&set);
+    const double rgb[3] = {1.0, 0.8, 0.6};
+    for (int q = 0; q < 4; ++q) {
+        const double z = 1.5 + 0.3 * q, o = 0.5 * q - 0.75;
+        const double quad[12] = {o, -0.5, z, o + 0.4, -0.5, z, o + 0.4, 0.5, z + 0.1, o, 0.5, z + 0.1};
+        shl_lights_add_polygon(set, quad, 4, rgb, 1);
+    }
+    const double c1[3] = {1.5, 0.0, 0.5}, c2[3] = {-1.5, 0.3, -0.5};
+    shl_lights_add_sphere(set, c1, 0.3, rgb);
+    shl_lights_add_sphere(set, c2, 0.2, rgb);
+    j.set = set;
+
+    printf("\n## Hessian cost (one core, double, ns per point; minimum of 31 repetitions)\n\n");
+    printf("| light | lmax | coeffs ns | grad ns | hess ns | hess/coeffs | hess/grad |\n|---|---|---|---|---|---|---|\n");
+    const int lm[4] = {4, 8, 14, 30};
+    for (int i = 0; i < 4; ++i) {
+        shl_ctx *ctx;
+        shl_ctx_create(lm[i], &ctx);
+        j.ctx = ctx;
+        bench_progress("lmax %d...", lm[i]);
+        const double tp = timed(run_poly, &j), tpg = timed(run_poly_grad, &j), tph = timed(run_poly_hess, &j);
+        const double ts = timed(run_sphere, &j), tsg = timed(run_sphere_grad, &j), tsh = timed(run_sphere_hess, &j);
+        const double tlg = timed(run_set_grad, &j), tlh = timed(run_set_hess, &j);
+        printf("| triangle | %d | %.0f | %.0f | %.0f | %.2fx | %.2fx |\n", lm[i], tp * 1e9, tpg * 1e9, tph * 1e9, tph / tp,
+               tph / tpg);
+        printf("| sphere | %d | %.0f | %.0f | %.0f | %.1fx | %.1fx |\n", lm[i], ts * 1e9, tsg * 1e9, tsh * 1e9, tsh / ts,
+               tsh / tsg);
+        printf("| set (4 quads, 2 spheres) | %d | | %.0f | %.0f | | %.2fx |\n", lm[i], tlg * 1e9, tlh * 1e9, tlh / tlg);
+        fprintf(csv, "triangle,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], tp * 1e9, tpg * 1e9, tph * 1e9, tph / tp, tph / tpg);
+        fprintf(csv, "sphere,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], ts * 1e9, tsg * 1e9, tsh * 1e9, tsh / ts, tsh / tsg);
+        fprintf(csv, "set,%d,,%.1f,%.1f,,%.3f\n", lm[i], tlg * 1e9, tlh * 1e9, tlh / tlg);
+        shl_ctx_destroy(ctx);
+    }
+    bench_loadavg(load, sizeof load);
+    printf("\nload average at end: %s\n", load);
+    shl_lights_destroy(set);
+    fclose(csv);
+    return 0;
+}

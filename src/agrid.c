@@ -1,0 +1,628 @@
+/* Adaptive multi-level SH grids (include/shlight.h, shl_agrid_*): levels of
+ * sparse uniform lattices refined where an a-posteriori estimate (the interpolant
+ * against the float light-set batch at two points per cell) exceeds the
+ * tolerance, blended into a C0 interpolant; each level is Wu 2020 Alg. 4 on its
+ * cells.  The estimate is one function (estimate_cells) over the cells of a level:
+ * an a-priori one (e.g. from analytic Hessians) would replace it there. */
+#include "agrid.h"
+#include "lights.h"
+#include "parallel.h"
+#include <math.h>
+#include <stdlib.h>
+
+/* ---- lattice keys and the hash ---- */
+
+enum { KEY_BITS = 21 }; /* lattice indices < 2^21: (SHL_GRID_RES_MAX - 1) 2^(SHL_AGRID_LEVELS_MAX - 1) < 2^17 */
+
+static uint64_t key3(const int i[3])
+{
+    return ((uint64_t)i[0] << (2 * KEY_BITS) | (uint64_t)i[1] << KEY_BITS | (uint64_t)i[2]) + 1; /* 0: empty */
+}
+
+static void unkey(uint64_t k, int i[3])
+{
+    k -= 1;
+    const uint64_t m = ((uint64_t)1 << KEY_BITS) - 1;
+    i[0] = (int)(k >> (2 * KEY_BITS));
+    i[1] = (int)(k >> KEY_BITS & m);
+    i[2] = (int)(k & m);
+}
+
+static size_t slot(uint64_t k, size_t cap)
+{
+    uint64_t x = k * 0x9E3779B97F4A7C15u;
+    x ^= x >> 29;
+    return (size_t)x & (cap - 1);
+}
+
+/* Index stored under k, or -1. */
+static long hfind(const shl__ahash *h, uint64_t k)
+{
+    if (!h->cap) return -1;
+    for (size_t s = slot(k, h->cap);; s = (s + 1) & (h->cap - 1)) {
+        if (h->key[s] == k) return (long)h->val[s];
+        if (!h->key[s]) return -1;
+    }
+}
+
+static void hset(shl__ahash *h, uint64_t k, uint32_t v)
+{
+    size_t s = slot(k, h->cap);
+    while (h->key[s]) s = (s + 1) & (h->cap - 1);
+    h->key[s] = k;
+    h->val[s] = v;
+    ++h->count;
+}
+
+/* Room for one more key (load <= 1/2); SHL_ENOMEM leaves h as it was. */
+static int hreserve(shl__ahash *h)
+{
+    if (2 * (h->count + 1) <= h->cap) return SHL_OK;
+    const size_t cap = h->cap ? 2 * h->cap : 64;
+    shl__ahash n = {shl__calloc(cap, sizeof(uint64_t)), shl__malloc(cap * sizeof(uint32_t)), cap, 0};
+    if (!n.key || !n.val) {
+        shl__free(n.key);
+        shl__free(n.val);
+        return SHL_ENOMEM;
+    }
+    for (size_t s = 0; s < h->cap; ++s)
+        if (h->key[s]) hset(&n, h->key[s], h->val[s]);
+    shl__free(h->key);
+    shl__free(h->val);
+    *h = n;
+    return SHL_OK;
+}
+
+/* *p (cap elements of size elem, used first) grown to newcap elements. */
+static int regrow(void **p, size_t used, size_t newcap, size_t elem)
+{
+    void *q = shl__malloc(newcap * elem);
+    if (!q) return SHL_ENOMEM;
+    if (used) memcpy(q, *p, used * elem);
+    shl__free(*p);
+    *p = q;
+    return SHL_OK;
+}
+
+/* ---- levels ---- */
+
+static void level_free(shl__alevel *L)
+{
+    shl__free(L->nodes.key);
+    shl__free(L->nodes.val);
+    shl__free(L->cells.key);
+    shl__free(L->cells.val);
+    shl__free(L->node_key);
+    shl__free(L->data);
+    shl__free(L->flag);
+    shl__free(L->cell);
+    shl__free(L->cell_key);
+    memset(L, 0, sizeof *L);
+}
+
+static void level_init(const shl_agrid *g, int l, shl__alevel *L)
+{
+    memset(L, 0, sizeof *L);
+    for (int a = 0; a < 3; ++a) {
+        L->n[a] = (g->res[a] - 1) << l;
+        L->h[a] = (g->hi[a] - g->lo[a]) / L->n[a]; /* = h_0 / 2^l exactly: node 2i of level l + 1 is node i of level l */
+    }
+}
+
+static size_t level_bytes(const shl__alevel *L, size_t node_len)
+{
+    return (L->nodes.cap + L->cells.cap) * (sizeof(uint64_t) + sizeof(uint32_t)) +
+           L->node_cap * (sizeof(uint64_t) + 1) + L->data_cap * node_len * sizeof(float) +
+           L->cell_cap * (sizeof(shl__acell) + sizeof(uint64_t));
+}
+
+/* Add node i (not yet present); its data is left for eval_nodes. */
+static int add_node(shl__alevel *L, const int i[3], size_t node_len)
+{
+    if (L->nnodes == L->node_cap) {
+        const size_t cap = L->node_cap ? 2 * L->node_cap : 256;
+        /* all three grown before any is swapped in, so that a failure leaves L consistent */
+        uint64_t *k = shl__malloc(cap * sizeof *k);
+        float *d = shl__malloc(cap * node_len * sizeof *d);
+        unsigned char *f = shl__malloc(cap);
+        if (!k || !d || !f) {
+            shl__free(k);
+            shl__free(d);
+            shl__free(f);
+            return SHL_ENOMEM;
+        }
+        if (L->nnodes) {
+            memcpy(k, L->node_key, L->nnodes * sizeof *k);
+            memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
+            memcpy(f, L->flag, L->nnodes);
+        }
+        shl__free(L->node_key);
+        shl__free(L->data);
+        shl__free(L->flag);
+        L->node_key = k;
+        L->data = d;
+        L->flag = f;
+        L->node_cap = L->data_cap = cap;
+    }
+    if (hreserve(&L->nodes)) return SHL_ENOMEM;
+    const uint64_t k = key3(i);
+    hset(&L->nodes, k, (uint32_t)L->nnodes);
+    L->node_key[L->nnodes] = k;
+    L->flag[L->nnodes] = 0;
+    ++L->nnodes;
+    return SHL_OK;
+}
+
+/* Add cell c (not yet present); its corners and flags are set by resolve_cells. */
+static int add_cell(shl__alevel *L, const int c[3])
+{
+    if (L->ncells == L->cell_cap) {
+        const size_t cap = L->cell_cap ? 2 * L->cell_cap : 256;
+        if (regrow((void **)&L->cell_key, L->ncells, cap, sizeof(uint64_t))) return SHL_ENOMEM;
+        if (regrow((void **)&L->cell, L->ncells, cap, sizeof(shl__acell))) return SHL_ENOMEM;
+        L->cell_cap = cap; /* both arrays hold cap now (cell_key first: a failure of the second leaves it larger) */
+    }
+    if (hreserve(&L->cells)) return SHL_ENOMEM;
+    const uint64_t k = key3(c);
+    hset(&L->cells, k, (uint32_t)L->ncells);
+    L->cell_key[L->ncells++] = k;
+    return SHL_OK;
+}
+
+/* Every cell's corner nodes (present: added with the cell) and flags (bit j: corner
+ * j flagged; all set on level 0). */
+static void resolve_cells(shl__alevel *L, int level0)
+{
+    for (size_t c = 0; c < L->ncells; ++c) {
+        int ci[3];
+        unkey(L->cell_key[c], ci);
+        unsigned char cf = level0 ? 0xFF : 0;
+        for (int j = 0; j < 8; ++j) {
+            int v[3];
+            for (int a = 0; a < 3; ++a) v[a] = ci[a] + ((j >> a) & 1);
+            L->cell[c].node[j] = (uint32_t)hfind(&L->nodes, key3(v));
+            if (L->flag[L->cell[c].node[j]]) cf |= (unsigned char)(1u << j);
+        }
+        L->cell[c].flags = cf;
+    }
+}
+
+/* Level 0: every node and cell, nodes in lattice order. */
+static int build_level0(const shl_agrid *g, shl__alevel *L)
+{
+    level_init(g, 0, L);
+    int i[3];
+    for (i[2] = 0; i[2] <= L->n[2]; ++i[2])
+        for (i[1] = 0; i[1] <= L->n[1]; ++i[1])
+            for (i[0] = 0; i[0] <= L->n[0]; ++i[0]) {
+                if (add_node(L, i, g->node_len)) return SHL_ENOMEM;
+                if (i[0] < L->n[0] && i[1] < L->n[1] && i[2] < L->n[2] && add_cell(L, i)) return SHL_ENOMEM;
+            }
+    resolve_cells(L, 1);
+    return SHL_OK;
+}
+
+static double node_coord(const shl_agrid *g, const shl__alevel *L, int a, int i)
+{
+    return i == L->n[a] ? g->hi[a] : g->lo[a] + i * L->h[a];
+}
+
+/* ---- the interpolant A ---- */
+
+/* A at p (finite) from levels 0..nl-1 into out[3 nc]; tmp: 3 nc doubles. */
+static void composite(const shl_agrid *g, const shl__alevel *lev, int nl, const double p[3], double *out,
+                      double *tmp)
+{
+    const shl__acell *cell[SHL_AGRID_LEVELS_MAX];
+    double w[SHL_AGRID_LEVELS_MAX], u[SHL_AGRID_LEVELS_MAX][3], x[3];
+    int top = 0; /* finest level with w = 1 (level 0 has it everywhere) */
+    for (int a = 0; a < 3; ++a) x[a] = fmin(fmax(p[a], g->lo[a]), g->hi[a]);
+    for (int l = 0; l < nl; ++l) {
+        const shl__alevel *L = lev + l;
+        int c[3];
+        for (int a = 0; a < 3; ++a) {
+            const double t = (x[a] - g->lo[a]) / L->h[a];
+            c[a] = t < L->n[a] ? (int)t : L->n[a] - 1;
+            u[l][a] = fmin(t - c[a], 1.0);
+        }
+        const long ci = hfind(&L->cells, key3(c));
+        cell[l] = ci >= 0 ? L->cell + ci : NULL;
+        w[l] = 0.0;
+        if (!cell[l]) continue;
+        const unsigned cf = cell[l]->flags;
+        if (cf == 0xFF) {
+            w[l] = 1.0;
+            top = l;
+            continue;
+        }
+        const double *v = u[l];
+        for (int j = 0; j < 8; ++j) /* w_l: trilinear weight of the flagged corners */
+            if (cf >> j & 1)
+                w[l] += (j & 1 ? v[0] : 1.0 - v[0]) * (j & 2 ? v[1] : 1.0 - v[1]) * (j & 4 ? v[2] : 1.0 - v[2]);
+    }
+    /* A = sum_{l >= top} w_l prod_{m > l} (1 - w_m) I_l */
+    const size_t nv = 3 * (size_t)g->nc;
+    double rest = 1.0;
+    int first = 1;
+    for (int l = nl - 1; l >= top; --l) {
+        if (!(w[l] > 0.0)) continue;
+        const double coef = w[l] * rest;
+        rest *= 1.0 - w[l];
+        const shl__alevel *L = lev + l;
+        shl__interp_point s;
+        for (int a = 0; a < 3; ++a) { /* Hermite basis, Wu 2020 Eq. 33-35 (as interp.c) */
+            const double uu = u[l][a], v = 1.0 - uu;
+            s.u[a] = uu;
+            s.hw[a][0] = (1.0 + 2.0 * uu) * v * v;
+            s.hw[a][1] = uu * v * v * L->h[a];
+            s.hw[a][2] = uu * uu * (3.0 - 2.0 * uu);
+            s.hw[a][3] = -uu * uu * v * L->h[a];
+        }
+        for (int j = 0; j < 8; ++j) s.ofs[j] = (size_t)cell[l]->node[j] * g->node_len;
+        shl__interp_ahead no_ahead = {.nrange = 0}; /* no look-ahead: levels are visited point by point */
+        if (first && coef == 1.0) {
+            g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, &no_ahead, out);
+            return;
+        }
+        g->isa->interp_f(L->data, SHL_INTERP_HERMITE, g->nc, &s, &no_ahead, tmp);
+        for (size_t i = 0; i < nv; ++i) out[i] = first ? coef * tmp[i] : out[i] + coef * tmp[i];
+        first = 0;
+    }
+}
+
+typedef struct {
+    const shl_agrid *g;
+    const double *pts;
+    double *out;
+} interp_job;
+
+static void interp_range(void *arg, int worker, long begin, long end)
+{
+    const interp_job *job = arg;
+    double tmp[3 * SHL_NCOEFFS(SHL_LMAX_MAX)];
+    (void)worker;
+    for (long p = begin; p < end; ++p)
+        composite(job->g, job->g->lev, job->g->nlevels, job->pts + 3 * p, job->out + 3 * (size_t)job->g->nc * p, tmp);
+}
+
+int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double *rgb, int nthreads)
+{
+    if (!grid || (npts > 0 && (!pts || !rgb))) return SHL_ENULL;
+    if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    interp_job job = {grid, pts, rgb};
+    return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
+}
+
+/* ---- fill ---- */
+
+enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
+
+typedef struct {
+    const shl_agrid *g;
+    const shl_lights *lights;
+    shl_ctx ctx;
+    shl__alevel *lev;
+    int l;              /* the level worked on */
+    double *est;        /* estimate_cells: per cell of level l */
+    char *ws;
+    size_t stride, batch_bytes;
+} fill_job;
+
+/* The nodes of level l, blocks of BLOCK in node order, through the float batch
+ * with gradients (Wu 2020 Alg. 1 l. 5-7), straight into the node data. */
+static void nodes_range(void *arg, int worker, long begin, long end)
+{
+    const fill_job *job = arg;
+    const shl_agrid *g = job->g;
+    shl__alevel *L = job->lev + job->l;
+    void *buf = job->batch_bytes ? job->ws + job->stride * (size_t)worker : NULL;
+    float pts[3 * BLOCK];
+    for (long b = begin; b < end; ++b) {
+        const size_t n0 = (size_t)b * BLOCK, left = L->nnodes - n0;
+        const int m = left < BLOCK ? (int)left : BLOCK;
+        for (int j = 0; j < m; ++j) {
+            int i[3];
+            unkey(L->node_key[n0 + j], i);
+            for (int a = 0; a < 3; ++a) pts[3 * j + a] = (float)node_coord(g, L, a, i[a]);
+        }
+        float *node = L->data + n0 * g->node_len;
+        shl__lights_batch_f_block(&job->ctx, job->lights, m, pts, node, g->node_len, node + 3 * g->nc, g->node_len, buf);
+    }
+}
+
+/* The estimate of every cell of level l (include/shlight.h): A of levels 0..l
+ * against the float batch (values only) at the samples lo + (c + q) h, q = 1/4 and 3/4
+ * on every axis, both rounded to float. */
+static void estimate_range(void *arg, int worker, long begin, long end)
+{
+    const fill_job *job = arg;
+    const shl_agrid *g = job->g;
+    const shl__alevel *L = job->lev + job->l;
+    const size_t nv = 3 * (size_t)g->nc;
+    char *w = job->ws + job->stride * (size_t)worker;
+    float *rgb = (float *)(void *)(w + shl__ws_stride(job->batch_bytes)), pts[3 * BLOCK];
+    double *a = (double *)(void *)(rgb + BLOCK * nv), *tmp = a + nv;
+    for (long b = begin; b < end; ++b) {
+        const size_t c0 = (size_t)b * (BLOCK / SAMPLES), left = L->ncells - c0;
+        const int mc = left < BLOCK / SAMPLES ? (int)left : BLOCK / SAMPLES;
+        for (int j = 0; j < mc; ++j) {
+            int c[3];
+            unkey(L->cell_key[c0 + j], c);
+            for (int q = 0; q < SAMPLES; ++q)
+                for (int k = 0; k < 3; ++k)
+                    pts[3 * (SAMPLES * j + q) + k] = (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
+        }
+        shl__lights_batch_f_block(&job->ctx, job->lights, SAMPLES * mc, pts, rgb, nv, NULL, 0,
+                                  job->batch_bytes ? w : NULL);
+        for (int j = 0; j < mc; ++j) {
+            double e = 0.0;
+            for (int q = 0; q < SAMPLES; ++q) {
+                const int s = SAMPLES * j + q;
+                const double x[3] = {pts[3 * s], pts[3 * s + 1], pts[3 * s + 2]};
+                composite(g, job->lev, job->l + 1, x, a, tmp);
+                for (int col = 0; col < 3; ++col) {
+                    double sum = 0.0;
+                    for (int k = 0; k < g->nc; ++k) {
+                        const double d = a[col * g->nc + k] - rgb[(size_t)s * nv + col * g->nc + k];
+                        sum += d * d;
+                    }
+                    e = fmax(e, sqrt(sum));
+                }
+            }
+            job->est[c0 + j] = e;
+        }
+    }
+}
+
+static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size_t extra)
+{
+    const int nw = shl__parallel_workers(nblocks, 1, nthreads);
+    job->stride = shl__ws_stride(shl__ws_stride(job->batch_bytes) + extra);
+    job->ws = NULL;
+    if (job->stride && !(job->ws = shl__malloc(job->stride * (size_t)nw))) return SHL_ENOMEM;
+    const int st = shl__parallel_for(nblocks, 1, nw, fn, job);
+    shl__free(job->ws);
+    job->ws = NULL;
+    return st;
+}
+
+static int eval_nodes(fill_job *job, int l, int nthreads)
+{
+    job->l = l;
+    const long n = (long)((job->lev[l].nnodes + BLOCK - 1) / BLOCK);
+    return run(job, n, nthreads, nodes_range, 0);
+}
+
+static int estimate_cells(fill_job *job, int l, double *est, int nthreads)
+{
+    job->l = l;
+    job->est = est;
+    const size_t nv = 3 * (size_t)job->g->nc;
+    const long n = (long)((job->lev[l].ncells + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
+    return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
+}
+
+typedef struct {
+    double e;
+    uint32_t cell;
+} ranked;
+
+static int by_estimate(const void *pa, const void *pb)
+{
+    const ranked *a = pa, *b = pb;
+    if (a->e != b->e) return a->e > b->e ? -1 : 1; /* largest first */
+    return (a->cell > b->cell) - (a->cell < b->cell);
+}
+
+/* Refine cell c of level l: level l + 1 gets the cells within one level-(l+1)
+ * spacing of c (4 per axis, clipped to the box) and their nodes, unless that
+ * would take the node count *total past max_nodes (returns 1, nothing added); the
+ * level-(l+1) nodes of c (3 per axis) are flagged. */
+static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint32_t c, long *total)
+{
+    int ci[3], lo[3], hi[3], i[3];
+    unkey(L->cell_key[c], ci);
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = ci[a] > 0 ? 2 * ci[a] - 1 : 0;
+        hi[a] = ci[a] + 1 < L->n[a] ? 2 * ci[a] + 3 : 2 * L->n[a];
+    }
+    long add = 0;
+    for (i[2] = lo[2]; i[2] <= hi[2]; ++i[2])
+        for (i[1] = lo[1]; i[1] <= hi[1]; ++i[1])
+            for (i[0] = lo[0]; i[0] <= hi[0]; ++i[0]) add += hfind(&F->nodes, key3(i)) < 0;
+    if (add > g->max_nodes - *total) return 1;
+    for (i[2] = lo[2]; i[2] <= hi[2]; ++i[2])
+        for (i[1] = lo[1]; i[1] <= hi[1]; ++i[1])
+            for (i[0] = lo[0]; i[0] <= hi[0]; ++i[0]) {
+                if (hfind(&F->nodes, key3(i)) < 0 && add_node(F, i, g->node_len)) return SHL_ENOMEM;
+                if (i[0] < hi[0] && i[1] < hi[1] && i[2] < hi[2] && hfind(&F->cells, key3(i)) < 0 && add_cell(F, i))
+                    return SHL_ENOMEM;
+            }
+    *total += add;
+    for (i[2] = 2 * ci[2]; i[2] <= 2 * ci[2] + 2; ++i[2])
+        for (i[1] = 2 * ci[1]; i[1] <= 2 * ci[1] + 2; ++i[1])
+            for (i[0] = 2 * ci[0]; i[0] <= 2 * ci[0] + 2; ++i[0]) F->flag[hfind(&F->nodes, key3(i))] = 1;
+    return SHL_OK;
+}
+
+/* The node data of a filled level cut to its node count (kept as is if that allocation fails). */
+static void trim_data(shl__alevel *L, size_t node_len)
+{
+    float *d = shl__malloc(L->nnodes * node_len * sizeof *d);
+    if (!d) return;
+    memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
+    shl__free(L->data);
+    L->data = d;
+    L->data_cap = L->nnodes;
+}
+
+static void free_levels(shl__alevel *lev, int n)
+{
+    for (int l = 0; l < n; ++l) level_free(lev + l);
+}
+
+static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_agrid_stats *st)
+{
+    st->nodes = st->cells = 0;
+    size_t bytes = sizeof(shl_agrid);
+    st->levels = nl;
+    for (int l = 0; l < nl; ++l) {
+        st->nodes += (long)lev[l].nnodes;
+        st->cells += (long)lev[l].ncells;
+        bytes += level_bytes(lev + l, g->node_len);
+    }
+    st->bytes = (long long)bytes;
+}
+
+/* Levels into lev[] (nl of them), stats of the fill into *st. */
+static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl__alevel *lev, int *nl,
+                 shl_agrid_stats *st)
+{
+    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, NULL, NULL, 0, 0};
+    job.batch_bytes = shl__lights_batch_f_bytes(&job.ctx, lights, 1); /* >= the values-only size */
+    *nl = 1;
+    int status = build_level0(g, lev);
+    if (!status) status = eval_nodes(&job, 0, nthreads);
+    long total = (long)lev[0].nnodes;
+    for (int l = 0; !status; ++l) {
+        shl__alevel *L = lev + l;
+        if (st->budget_hit || l + 1 >= g->max_levels) { /* no refinement can follow: not estimated */
+            st->unresolved = -1;
+            break;
+        }
+        double *est = shl__malloc(L->ncells * sizeof *est);
+        ranked *flagged = shl__malloc(L->ncells * sizeof *flagged);
+        if (!est || !flagged) status = SHL_ENOMEM;
+        if (!status) status = estimate_cells(&job, l, est, nthreads);
+        size_t nf = 0, done = 0;
+        if (!status) {
+            st->samples += SAMPLES * (long)L->ncells;
+            const double scale = g->criterion == SHL_AGRID_MEAN ? ldexp(1.0, -3 * l) : 1.0; /* the cell's volume / h_0^3 */
+            for (size_t c = 0; c < L->ncells; ++c)
+                if (est[c] * scale > g->tol) flagged[nf++] = (ranked){est[c] * scale, (uint32_t)c};
+                else st->max_estimate = fmax(st->max_estimate, est[c] * scale);
+            qsort(flagged, nf, sizeof *flagged, by_estimate);
+        }
+        if (!status && nf > 0) {
+            shl__alevel *F = lev + l + 1;
+            level_init(g, l + 1, F);
+            *nl = l + 2;
+            for (; done < nf && !status; ++done) {
+                const int r = refine(g, L, F, flagged[done].cell, &total);
+                if (r == 1) st->budget_hit = 1;
+                if (r) {
+                    status = r < 0 ? r : SHL_OK;
+                    break;
+                }
+            }
+            if (!status && F->ncells == 0) {
+                level_free(F);
+                *nl = l + 1;
+            }
+        }
+        for (size_t k = done; k < nf && !status; ++k) { /* left unrefined */
+            ++st->unresolved;
+            st->max_estimate = fmax(st->max_estimate, flagged[k].e);
+        }
+        shl__free(est);
+        shl__free(flagged);
+        if (status || *nl == l + 1) break;
+        resolve_cells(lev + l + 1, 0);
+        status = eval_nodes(&job, l + 1, nthreads);
+    }
+    if (!status) {
+        for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
+        fill_stats(g, lev, *nl, st);
+    }
+    return status;
+}
+
+int shl_agrid_fill(shl_agrid *grid, const shl_lights *lights, int nthreads)
+{
+    if (!grid || !lights) return SHL_ENULL;
+    if (shl__check_threads(nthreads)) return SHL_EDOMAIN;
+    shl__alevel lev[SHL_AGRID_LEVELS_MAX];
+    memset(lev, 0, sizeof lev);
+    shl_agrid_stats st;
+    memset(&st, 0, sizeof st);
+    int nl = 0;
+    const int status = build(grid, lights, nthreads, lev, &nl, &st);
+    if (status) {
+        free_levels(lev, SHL_AGRID_LEVELS_MAX);
+        return status;
+    }
+    free_levels(grid->lev, grid->nlevels);
+    memcpy(grid->lev, lev, sizeof lev);
+    grid->nlevels = nl;
+    grid->stats = st;
+    return SHL_OK;
+}
+
+/* ---- create, destroy, stats ---- */
+
+int shl_agrid_create(const shl_ctx *ctx, const double lo[3], const double hi[3], const int res[3], int criterion,
+                     double tol, long max_nodes, shl_agrid **out)
+{
+    if (!out) return SHL_ENULL;
+    *out = NULL;
+    if (!ctx || !lo || !hi || !res) return SHL_ENULL;
+    if (shl__check_finite(lo, 3) || shl__check_finite(hi, 3) || !isfinite(tol)) return SHL_ENONFINITE;
+    if (!(tol > 0.0) || (criterion != SHL_AGRID_MAX && criterion != SHL_AGRID_MEAN)) return SHL_EDOMAIN;
+    long n0 = 1;
+    int levels = SHL_AGRID_LEVELS_MAX;
+    for (int a = 0; a < 3; ++a) {
+        if (res[a] < 2 || res[a] > SHL_GRID_RES_MAX || !(lo[a] < hi[a])) return SHL_EDOMAIN;
+        const double m = fmax(fabs(lo[a]), fabs(hi[a]));
+        int la = 0; /* levels whose spacing keeps the float fill of shl_grid_fill */
+        for (; la < SHL_AGRID_LEVELS_MAX; ++la) {
+            const double h = (hi[a] - lo[a]) / (double)((res[a] - 1) << la);
+            if (!(m <= 0x1p126 && isfinite(h) && h >= 0x1p-10 * m && h >= 0x1p-100)) break;
+        }
+        if (la == 0) return SHL_EDOMAIN;
+        levels = la < levels ? la : levels;
+        n0 *= res[a];
+    }
+    if (max_nodes < n0 || max_nodes > 0x7FFFFFFFL) return SHL_EDOMAIN;
+    shl_agrid *g = shl__calloc(1, sizeof *g);
+    if (!g) return SHL_ENOMEM;
+    g->lmax = ctx->lmax;
+    g->nc = ctx->nc;
+    g->isa = ctx->isa;
+    g->node_len = 12 * (size_t)ctx->nc;
+    g->tol = tol;
+    g->criterion = criterion;
+    g->max_nodes = max_nodes;
+    g->max_levels = levels;
+    for (int a = 0; a < 3; ++a) {
+        g->res[a] = res[a];
+        g->lo[a] = lo[a];
+        g->hi[a] = hi[a];
+    }
+    if (build_level0(g, g->lev)) {
+        level_free(g->lev);
+        shl__free(g);
+        return SHL_ENOMEM;
+    }
+    memset(g->lev[0].data, 0, g->lev[0].nnodes * g->node_len * sizeof(float));
+    trim_data(g->lev, g->node_len);
+    g->nlevels = 1;
+    fill_stats(g, g->lev, 1, &g->stats);
+    *out = g;
+    return SHL_OK;
+}
+
+void shl_agrid_destroy(shl_agrid *grid)
+{
+    if (!grid) return;
+    free_levels(grid->lev, grid->nlevels);
+    shl__free(grid);
+}
+
+int shl_agrid_get_stats(const shl_agrid *grid, shl_agrid_stats *stats)
+{
+    if (!grid || !stats) return SHL_ENULL;
+    *stats = grid->stats;
+    return SHL_OK;
+}
