@@ -109,6 +109,13 @@ typedef void (*shl__interp_fn)(const float *data, int method, int nc, const shl_
 typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double radius, int npts, const float *pts,
                                      float *coeffs, float *grad, void *work);
 
+/* Single-call polygon ZH integrals in double, vectorized across lobes
+ * (simd/poly_zh_batch.h): the layouts and scaled units of shl__poly_zh_d and
+ * shl__poly_zh_grad_d (src/polygon.h), results equal to theirs. */
+struct shl__poly_geom;
+typedef void (*shl__poly_zh_fn)(const struct shl__poly_geom *g, int lmax, double *zh);
+typedef void (*shl__poly_zh_grad_fn)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+
 /* The kernels of one instruction set; src/dispatch.c builds one per line of
  * simd/isa_list.h. */
 typedef struct shl__isa shl__isa;
@@ -120,6 +127,8 @@ struct shl__isa {
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
+    shl__poly_zh_fn poly_zh;           /* shl_polygon (simd/poly_zh_batch.h) */
+    shl__poly_zh_grad_fn poly_zh_grad; /* shl_polygon_grad */
 };
 
 /* The interpolation reference (src/interp.c, src/interp_kernel.h): the scalar
@@ -139,6 +148,8 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
                                  float *coeffs, float *grad, void *work);                              \
     void shl__interp_f_##isa(const float *data, int method, int nc, const shl__interp_point *s,         \
                              shl__interp_ahead *ahead, double *out);                                   \
-    void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);
+    void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
+    void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
+    void shl__poly_zh_grad_##isa(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
 
 #endif

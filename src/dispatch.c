@@ -66,6 +66,8 @@ static const shl__isa isas[] = {
         .sphere_batch = shl__sphere_batch_##isa,                                                       \
         .interp_f = shl__interp_f_##isa,                                                               \
         .accumulate = shl__accumulate_##isa,                                                           \
+        .poly_zh = shl__poly_zh_##isa,                                                                 \
+        .poly_zh_grad = shl__poly_zh_grad_##isa,                                                       \
     },
 #include "../simd/isa_list.h"
 #undef SHL_ISA

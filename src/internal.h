@@ -215,6 +215,10 @@ static inline void shl__newell_scaled(const double *verts, int n, double nrm[3])
  * gamma and mu, Wang 2018 Eq. 19-20); 0 for the zero vector. */
 static inline double shl__norm3(const double v[3])
 {
+    /* v . v in [2^-896, 2^900] implies the largest |v_k| in [2^-450, 2^450]: the plain
+     * form below, without the fmax calls (libm calls at -O2) */
+    const double d = shl__dot3(v, v);
+    if (d >= 0x1p-896 && d <= 0x1p900) return sqrt(d);
     const double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
     if (!(m > 0.0)) return 0.0;
     if (m >= 0x1p-450 && m <= 0x1p450) return sqrt(shl__dot3(v, v));

@@ -109,6 +109,16 @@ static double plane_height(const double *verts, const double x[3], const dd big[
     return acc.hi / shl__norm3(hi); /* N in units 2^-2e of newell_normal: the ratio is in units 2^-ex */
 }
 
+/* In-plane offsets from the foot F of x of the vertices (e[i] = rel_i minus its
+ * normal component). */
+static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], double (*e)[3])
+{
+    for (int i = 0; i < n; ++i) {
+        const double h = shl__dot3(nrm, rel[i]);
+        for (int k = 0; k < 3; ++k) e[i][k] = rel[i][k] - h * nrm[k];
+    }
+}
+
 /* Solid angle of the polygon (magnitude) as a fan of Van Oosterom-Strackee
  * triangles, tan(omega/2) = N / D.  Unlike the sum-of-angles formula (Wang 2018
  * Eq. 24) this keeps full relative accuracy for tiny polygons and handles
@@ -158,19 +168,19 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     }
     const double a = fabs(height);
     double abs_total = 0.0, theta = 0.0, delta = 0.0, abs_delta = 0.0;
-    int foot_near_boundary = 0;
+    double num_i[SHL_MAX_VERTS], den_i[SHL_MAX_VERTS], dot_i[SHL_MAX_VERTS], s_i[SHL_MAX_VERTS];
+    double off[SHL_MAX_VERTS][3]; /* in-plane offsets e_i from the foot, s_i = |e_i| */
+    plane_offsets(rel, n, nrm, off);
+    for (int i = 0; i < n; ++i) s_i[i] = shl__norm3(off[i]);
+    int foot_near_boundary = 0, npos = 0, nneg = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
-        double ei[3], ej[3], edge[3], c[3];
-        const double hi = shl__dot3(nrm, rel[i]), hj = shl__dot3(nrm, rel[j]);
-        for (int k = 0; k < 3; ++k) {
-            ei[k] = rel[i][k] - hi * nrm[k];
-            ej[k] = rel[j][k] - hj * nrm[k];
-        }
+        const double *ei = off[i], *ej = off[j];
+        double edge[3], c[3];
         scaled_sub3(verts + 3 * j, verts + 3 * i, e, edge); /* e_i x e_j = e_i x (v_j - v_i) */
         shl__cross3(ei, edge, c);
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
-        const double si = shl__norm3(ei), sj = shl__norm3(ej);
+        const double si = s_i[i], sj = s_i[j];
         /* The split omega_i = theta_i + (omega_i - theta_i) below needs the foot well
          * inside or outside: on an edge or a vertex theta_i is +-pi or atan2(0, 0), and
          * within ~a of one theta_i turns by O(1) over distances where omega_i barely
@@ -183,13 +193,23 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         if (ff > 0.0) t = fmin(1.0, fmax(0.0, -shl__dot3(ei, f) / ff));
         double q[3];
         for (int k = 0; k < 3; ++k) q[k] = ei[k] + t * f[k]; /* the edge's point nearest the foot */
-        foot_near_boundary |= !(shl__norm3(q) > a) || (num == 0.0 && dot <= 0.0) || si == 0.0 || sj == 0.0;
+        foot_near_boundary |= !(shl__dot3(q, q) > a * a) || /* |q| > a; q, a in scaled units: no underflow of a^2 */ (num == 0.0 && dot <= 0.0) || si == 0.0 || sj == 0.0;
         const double pair = dot >= 0.0 ? ri * rj + dot
                                        : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
         const double den = pair + a * (ri + rj) + a * a;
         const double term = 2.0 * atan2(num, den);
         total += term;
         abs_total += fabs(term);
+        npos += term > 0.0, nneg += term < 0.0;
+        num_i[i] = num, den_i[i] = den, dot_i[i] = dot;
+    }
+    /* Terms of one sign: the direct sum's magnitude sum is |total|, the least any form
+     * can have, so the split below could not be chosen for a smaller one. */
+    if (foot_near_boundary || npos == 0 || nneg == 0) return fabs(total);
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1 == n) ? 0 : i + 1;
+        const double num = num_i[i], den = den_i[i], dot = dot_i[i], si = s_i[i], sj = s_i[j];
+        const double ri = dist[i], rj = dist[j];
         const double den0 = dot >= 0.0 ? si * sj + dot : num * num / (si * sj - dot);
         theta += 2.0 * atan2(num, den0);
         const double p = a * (si * si + sj * sj + a * a) / (ri * rj + si * sj) + ri + rj + a;
@@ -198,18 +218,8 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         abs_delta += fabs(dterm);
     }
     const double k = nearbyint(theta / (2.0 * M_PI));
-    if (!foot_near_boundary && 2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
+    if (2.0 * M_PI * fabs(k) + abs_delta < abs_total) return fabs(2.0 * M_PI * k + delta);
     return fabs(total);
-}
-
-/* In-plane offsets from the foot F of x of the vertices (e[i] = rel_i minus its
- * normal component). */
-static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], double (*e)[3])
-{
-    for (int i = 0; i < n; ++i) {
-        const double h = shl__dot3(nrm, rel[i]);
-        for (int k = 0; k < 3; ++k) e[i][k] = rel[i][k] - h * nrm[k];
-    }
 }
 
 /* In-plane distance from F (the origin of the offsets) to the triangle (p0, p1, p2),
@@ -307,15 +317,25 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
         const double clen = shl__norm3(c);
         /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
-        g->gamma[e] = atan2(clen, shl__dot3(g->rel[e], g->rel[f]));
-        g->sin_gamma[e] = sin(g->gamma[e]);
-        g->cos_gamma[e] = cos(g->gamma[e]);
-        const double half = sin(0.5 * g->gamma[e]);
-        g->omc_gamma[e] = 2.0 * half * half;
+        const double dotp = shl__dot3(g->rel[e], g->rel[f]), rr = g->dist[e] * g->dist[f];
+        g->gamma[e] = atan2(clen, dotp);
+        if (rr >= 0x1p-900) { /* |c| = r_e r_f sin(gamma), rel_e . rel_f = r_e r_f cos(gamma): a few ulps */
+            g->sin_gamma[e] = clen / rr;
+            g->cos_gamma[e] = dotp / rr;
+            /* 1 - cos = sin^2 / (1 + cos) without cancellation where cos > 0 */
+            g->omc_gamma[e] = dotp > 0.0 ? g->sin_gamma[e] * g->sin_gamma[e] / (1.0 + g->cos_gamma[e])
+                                         : 1.0 - g->cos_gamma[e];
+        } else {
+            g->sin_gamma[e] = sin(g->gamma[e]);
+            g->cos_gamma[e] = cos(g->gamma[e]);
+            const double half = sin(0.5 * g->gamma[e]);
+            g->omc_gamma[e] = 2.0 * half * half;
+        }
         /* w_f - w_e = edge/r_f + w_e (r_e - r_f)/r_f, r_e - r_f = -edge.(rel_e + rel_f)/(r_e + r_f):
          * no cancellation for an edge short against the distances; for a longer one its terms
          * can reach |edge| / min(r) (and overflow), while w_f - w_e itself is then accurate */
-        if (shl__norm3(edge) <= fmin(g->dist[e], g->dist[f])) {
+        const double rmin = g->dist[e] < g->dist[f] ? g->dist[e] : g->dist[f];
+        if (shl__dot3(edge, edge) <= rmin * rmin) { /* |edge| <= min r, squared (either form is valid where squares underflow) */
             double sum[3];
             for (int k = 0; k < 3; ++k) sum[k] = g->rel[e][k] + g->rel[f][k];
             const double dr = -shl__dot3(edge, sum) / (g->dist[e] + g->dist[f]);
@@ -479,18 +499,15 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
 }
 
-#define REAL double
-#define WITH_GRAD 0
-#define SUFFIX(name) name##_d
-#include "polygon_zh.h"
-#undef SUFFIX
-#undef WITH_GRAD
-#define WITH_GRAD 1
-#define SUFFIX(name) name##_grad_d
-#include "polygon_zh.h"
-#undef SUFFIX
-#undef WITH_GRAD
-#undef REAL
+/* The double recurrence is the scalar ISA's kernel (simd/poly_zh_batch.h, lobes
+ * two side by side); shl_polygon and shl_polygon_grad call their context's ISA. */
+void shl__poly_zh_scalar(const shl__poly_geom *g, int lmax, double *zh);
+void shl__poly_zh_grad_scalar(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+void shl__poly_zh_d(const shl__poly_geom *g, int lmax, double *zh) { shl__poly_zh_scalar(g, lmax, zh); }
+void shl__poly_zh_grad_d(const shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
+{
+    shl__poly_zh_grad_scalar(g, lmax, zh, zh_grad);
+}
 
 /* Float instances of the recurrence (fk: float kernel), wrapped below. */
 void shl__poly_zh_fk(const shl__poly_geom *g, int lmax, float *zh);
@@ -570,7 +587,7 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
     shl__poly_geom g;
     double zh[SHL__ZH_BLOCK];
     shl__poly_geom_init(&g, x, verts, n);
-    shl__poly_zh_d(&g, ctx->lmax, zh);
+    ctx->isa->poly_zh(&g, ctx->lmax, zh);
     shl__zh_to_sh(ctx->lmax, zh, coeffs);
     return SHL_OK;
 }
@@ -609,11 +626,10 @@ int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts,
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    double zh[SHL__ZH_BLOCK], zh_grad[3 * SHL__ZH_BLOCK];
+    double zh[4 * SHL__ZH_BLOCK]; /* value, then the 3 gradient blocks */
     shl__poly_geom_init(&g, x, verts, n);
-    shl__poly_zh_grad_d(&g, ctx->lmax, zh, zh_grad);
-    shl__zh_to_sh(ctx->lmax, zh, coeffs);
-    for (int a = 0; a < 3; ++a) shl__zh_to_sh(ctx->lmax, zh_grad + a * SHL__ZH_BLOCK, grad + a * ctx->nc);
+    ctx->isa->poly_zh_grad(&g, ctx->lmax, zh, zh + SHL__ZH_BLOCK);
+    shl__zh_to_sh_grad(ctx->lmax, zh, coeffs, grad, ctx->nc);
     shl__poly_grad_unscale(&g, grad, 3 * ctx->nc);
     return SHL_OK;
 }

@@ -1,7 +1,8 @@
 /* ZH recurrence of Wang & Ramamoorthi 2018 (Sec. 4.1, Alg. 1), optionally with
  * the spatial gradient of every ZH integral (Wu et al. 2020, Sec. 5), in one
  * pass that shares the B/D edge recurrences and the Legendre values at the
- * vertices.  Instantiated by polygon.c with REAL = double/float and
+ * vertices.  Instantiated by polygon.c with REAL = float (the double version is
+ * simd/poly_zh_batch.h, the same arithmetic) and
  * WITH_GRAD = 0/1; SUFFIX names the instance.
  *
  * Gradient.  Wu 2020 Eq. (10)-(16): d/dx_a of the ZH integral of lobe w_c is
@@ -22,7 +23,8 @@
  * differences) and write s P(a_{e+1}) + b P(a_e) = B_1 P(a_e) + s dP, with
  * B_1 = a sin(gamma) + b (1 - cos(gamma)) formed in double.
  *
- * Loop order.  Lobes in blocks of SHL__ZH_LANES side by side (their recurrences
+ * Loop order (the float instances; the double recurrence is simd/poly_zh_batch.h,
+ * the same arithmetic across lobes in vectors).  Lobes in blocks of SHL__ZH_LANES side by side (their recurrences
  * are independent: with one lobe at a time every band step waited on the
  * previous one), edges next, bands innermost with the lanes inside each band
  * step, so the lanes' chains overlap in the pipeline (or share SIMD registers).

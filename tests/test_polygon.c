@@ -5,6 +5,7 @@
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
+#include "isa_ctx.h"
 #include "ref_quad.h"
 #include "zh_tables.h"
 #include <float.h>
@@ -72,6 +73,30 @@ static void random_sweep(int lmax, double tol, int cases, unsigned seed)
 
 SHL_TEST(polygon_vs_reference_lmax14) { random_sweep(14, 1e-12, 60, 11); }
 SHL_TEST(polygon_vs_reference_lmax30) { random_sweep(SHL_LMAX_MAX, 1e-10, 30, 12); }
+
+/* shl_polygon runs its context's ISA kernel (simd/poly_zh_batch.h): every ISA this
+ * CPU runs meets the bound of polygon_vs_reference_lmax14 on the same kind of cases. */
+SHL_TEST(polygon_every_isa_vs_reference)
+{
+    char note[256] = "";
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], 14);
+        if (!ctx) continue;
+        rng_t r = {13};
+        double worst = 0.0;
+        for (int it = 0; it < 30; ++it) {
+            double x[3], verts[18];
+            int n;
+            random_case(&r, it % 3, x, verts, &n);
+            const double e = rel_error_vs_reference(ctx, x, verts, n);
+            worst = fmax(worst, e);
+            if (!(e <= 1e-12)) harness_fail(__FILE__, __LINE__, "%s case %d: error/omega %.3g > 1e-12", isas[i], it, e);
+        }
+        snprintf(note + strlen(note), sizeof note - strlen(note), "%s %.2e; ", isas[i], worst);
+        shl_ctx_destroy(ctx);
+    }
+    harness_note("lmax 14 max error/omega per ISA: %s(tol 1e-12)", note);
+}
 
 /* Max over bands of |got - want| / tol[l], with tol the derived per-band float
  * tolerances of float_tol.h at x (the double reference's max|grad| for its

@@ -5,10 +5,12 @@
 #include "geom.h"
 #include "harness.h"
 #include "internal.h"
+#include "isa_ctx.h"
 #include "ref_quad.h"
 #include "zh_tables.h"
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 enum { NC20 = SHL_NCOEFFS(20), NCMAX = SHL_NCOEFFS(SHL_LMAX_MAX) };
 
@@ -68,6 +70,37 @@ SHL_TEST(polygon_grad_vs_reference_random)
     }
     harness_note("lmax 20 max gradient error / max|grad| %.2e (tol 1e-8)", worst);
     shl_ctx_destroy(ctx);
+}
+
+/* shl_polygon_grad runs its context's ISA kernel: every ISA this CPU runs meets the
+ * bound of polygon_grad_vs_reference_random (same cases, fewer). */
+SHL_TEST(polygon_grad_every_isa)
+{
+    char note[256] = "";
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], 20);
+        if (!ctx) continue;
+        rng_t r = {21};
+        double worst = 0.0;
+        for (int it = 0; it < 12; ++it) {
+            double center[3], nrm[3], off[3], v[18], x[3];
+            const int n = it % 3 == 0 ? 3 : it % 3 == 1 ? 4 : 6;
+            for (int k = 0; k < 3; ++k) center[k] = rng_range(&r, -1, 1);
+            rng_unit_vector(&r, nrm);
+            random_polygon(&r, n, n == 6, center, nrm, rng_range(&r, 0.3, 2.0), v);
+            rng_unit_vector(&r, off);
+            if (fabs(off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]) < 0.05)
+                for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
+            const double dist = rng_range(&r, 0.5, 4.0);
+            for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+            const double e = grad_error(ctx, x, v, n, NULL);
+            worst = fmax(worst, e);
+            if (!(e <= 1e-8)) harness_fail(__FILE__, __LINE__, "%s case %d: %.3g", isas[i], it, e);
+        }
+        snprintf(note + strlen(note), sizeof note - strlen(note), "%s %.2e; ", isas[i], worst);
+        shl_ctx_destroy(ctx);
+    }
+    harness_note("lmax 20 max gradient error / max|grad| per ISA: %s(tol 1e-8)", note);
 }
 
 /* One configuration of the float path (double geometry) against the reference

@@ -1,0 +1,164 @@
+/* Single-call polygon ZH integrals in double (shl_polygon, shl_polygon_grad),
+ * vectorized ACROSS LOBES: the recurrence of src/polygon_zh.h (see its comments:
+ * Wang 2018 Eq. 11, 14, 26-32, the small-arc dP terms, Wu 2020's gradient by
+ * parts) for ZW lobes side by side in one vector, ZW = the ISA's double width
+ * SHL_VDLEN (4 on AVX2), at least 2 (the scalar ISA: two SSE2 / NEON lanes or
+ * plain code).  The lobes' recurrences are independent, so one band step of ZW
+ * lobes is one chain of vector operations instead of ZW chains.  Written with the
+ * compilers' generic vector type (elementwise + - *, no fused multiply-add: gcc's
+ * C11 mode and the clang pragma below), each lane does exactly the one-lobe
+ * arithmetic of polygon_zh.h (and of the Hessian's recurrence, polygon_hess.c,
+ * whose values and gradients test_hessian compares with these), so all ISAs give
+ * the same bits.  A partial last block repeats its last lobe.  Compiled once
+ * per ISA of simd/isa_list.h (Makefile); needs the polygon geometry of
+ * src/polygon.h, so it includes that header. */
+#include "../src/polygon.h"
+#include "kernel_api.h"
+#include <string.h>
+
+#ifdef __clang__
+#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
+#endif
+
+#if defined(SHL_VDLEN) && SHL_VDLEN > 2
+#define ZW SHL_VDLEN
+#else
+#define ZW 2
+#endif
+typedef double zv __attribute__((vector_size(ZW * sizeof(double))));
+
+static inline zv zv_set1(double x)
+{
+    double t[ZW];
+    for (int k = 0; k < ZW; ++k) t[k] = x;
+    zv v;
+    memcpy(&v, t, sizeof v);
+    return v;
+}
+
+/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of polygon_zh.h */
+static inline zv zv_dot(zv ux, zv uy, zv uz, const double p[3])
+{
+    return ux * zv_set1(p[0]) + uy * zv_set1(p[1]) + uz * zv_set1(p[2]);
+}
+
+static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
+{
+    double t[ZW];
+    memcpy(t, &v, sizeof t);
+    for (int k = 0; k < count; ++k) out[k * stride] = t[k];
+}
+
+__attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
+                                                           double *zh_grad, const int with_grad)
+{
+    const int n = g->n, ndir = 2 * lmax + 1;
+    const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
+    if (area && !with_grad) {
+        shl__poly_zh_area(g, lmax, zh);
+        return;
+    }
+    /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
+    const int ltop = with_grad ? lmax : lmax - 1;
+    double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
+    double l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
+    inv_l[lmax + 1] = 1.0 / (lmax + 1);
+    for (int l = 0; l <= lmax; ++l) {
+        l_m1[l] = l - 1;
+        twol_m1[l] = 2 * l - 1;
+        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
+        inv_l[l] = 1.0 / (l + (l == 0));
+        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Eq. 29 weights */
+        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
+    }
+    for (int d0 = 0; d0 < ndir; d0 += ZW) {
+        double t[3][ZW];
+        for (int k = 0; k < ZW; ++k)
+            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1][c];
+        zv ux, uy, uz;
+        memcpy(&ux, t[0], sizeof ux);
+        memcpy(&uy, t[1], sizeof uy);
+        memcpy(&uz, t[2], sizeof uz);
+        zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1], edge_i[SHL_LMAX_MAX + 1];
+        for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
+        if (with_grad)
+            for (int a = 0; a < 3; ++a)
+                for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
+        for (int e = 0; e < n; ++e) {
+            const int f = (e + 1 == n) ? 0 : e + 1;
+            const zv gamma = zv_set1(g->gamma[e]);
+            /* Eq. 20: coordinates of the lobe axes in the edge frame */
+            const zv a = zv_dot(ux, uy, uz, g->w[e]), b = zv_dot(ux, uy, uz, g->lam[e]);
+            const zv c = zv_dot(ux, uy, uz, g->mu[e]), af = zv_dot(ux, uy, uz, g->w[f]);
+            const zv c2 = c * c; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
+            const zv s = a * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
+            const zv b1 = a * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
+            const zv da = zv_dot(ux, uy, uz, g->dw[e]);
+            zv p_lm1 = a, p_lm2 = zv_set1(1.0);      /* P_{l-1}(a_e), P_{l-2}(a_e) */
+            zv dp_lm1 = da, dp_lm2 = zv_set1(0.0);   /* dP_{l-1}, dP_{l-2} */
+            zv b_lm1 = b1, b_lm2 = gamma;            /* B_1, B_0 (Eq. 26-27) */
+            zv d_lm1 = gamma, d_lm2 = zv_set1(0.0);  /* D_1, D_0 (Eq. 28) */
+            bsum[0] += c * gamma;
+            if (lmax >= 2) bsum[1] += c * b1;
+            const zv i0 = zv_set1(g->f_integral[e]), fp1 = zv_set1(g->fprime1[e]);
+            zv v = zv_set1(0.0), i_lm1 = v, j_lm1 = v, j_lm2 = v;
+            if (with_grad) {
+                v = zv_dot(ux, uy, uz, g->gvec[e]);
+                /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+                i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * zv_set1(0.5); /* I_1 */
+                j_lm1 = i0;                                                /* J_1, J_0 = 0 */
+                edge_i[0] = i0;
+                if (lmax >= 1) edge_i[1] = i_lm1;
+            }
+            for (int l = 2; l <= ltop; ++l) {
+                const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
+                const zv pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl; /* Eq. 11 */
+                const zv dl = tlm1 * b_lm1 + d_lm2;                  /* Eq. 32 */
+                /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
+                const zv dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
+                if (with_grad) {
+                    const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
+                    const zv jl = tlm1 * i_lm1 + j_lm2;
+                    j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
+                    edge_i[l] = il;
+                    /* B_lmax (l = ltop here) goes into the unused bsum[lmax] */
+                }
+                /* Eq. 31: C_{l-1} */
+                const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
+                const zv bl = (tlm1 * cl - lm1 * b_lm2) * rl; /* Eq. 30 */
+                b_lm2 = b_lm1, b_lm1 = bl;
+                bsum[l] += c * bl; /* Eq. 14 */
+                p_lm2 = p_lm1, p_lm1 = pl;
+                dp_lm2 = dp_lm1, dp_lm1 = dpl;
+                d_lm2 = d_lm1, d_lm1 = dl;
+            }
+            if (with_grad) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+                for (int ax = 0; ax < 3; ++ax) {
+                    const zv m = zv_set1(g->mu[e][ax]);
+                    for (int l = 0; l <= lmax; ++l) gsum[ax][l] += m * edge_i[l];
+                }
+        }
+        surf[0] = zv_set1(g->solid_angle); /* S_0 */
+        if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
+        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(s_b[l]) * bsum[l - 1] + zv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
+        const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
+        for (int l = 0; l <= lmax; ++l) {
+            const zv kl = zv_set1(norm[l]);
+            const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
+            if (!area) zv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
+            if (with_grad)
+                for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
+        }
+    }
+    if (area) shl__poly_zh_area(g, lmax, zh); /* coefficients as the non-gradient kernel */
+}
+
+void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
+{
+    zh_lanes(g, lmax, zh, NULL, 0);
+}
+
+void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
+{
+    zh_lanes(g, lmax, zh, zh_grad, 1);
+}
