@@ -221,7 +221,7 @@ static void run_scene(const char *file, const char *name, int light_in_box, int 
      * the API), at a budget of 32^3 nodes; then SHL_AGRID_MAX at smaller budgets and the smallest
      * tolerance (a light in the box: the estimate stays above any tolerance at its discontinuity,
      * the budget decides). */
-    const double rel[] = {1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4};
+    const double rel[] = {1e-1, 3e-2, 1e-2, 3e-3, 2e-3, 1.5e-3, 1e-3, 3e-4};
     const long budgets[] = {4000, 8000, 16000};
     const int cres[] = {4, 8}, nrel = sizeof rel / sizeof rel[0], nb = sizeof budgets / sizeof budgets[0];
     result best_nodes[2], best_time[2];

@@ -338,9 +338,11 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * count stays <= max_nodes (ring included, below); the refinement is breadth-first
  * (level by level), so a tight budget goes to the coarser levels first.  A level
  * from which no refinement can follow (the budget was hit, or the finest level
- * allowed) is not estimated.  The ring cells of level l >= 1 (below) are not estimated:
- * each lies in an unrefined cell of level l - 1, whose estimate was within tol, and
- * keeps that verdict (it is never refined).
+ * allowed) is not estimated.  Assuming that refinement does not increase e, some
+ * cells keep a verdict instead of being estimated (and are never refined): the ring
+ * cells of level l >= 1 (below; each lies in an unrefined level-(l-1) cell, criterion
+ * within tol) and, for SHL_AGRID_MEAN, the children of a cell whose criterion was
+ * <= 8 tol (a child's is then <= tol: one eighth the volume).
  * An a-posteriori estimate is a measurement at two points per cell, not a bound:
  * the error elsewhere in a cell may exceed it (tests/test_agrid.c measures the
  * ratio at random points), and a feature smaller than a cell (a light's edge, a

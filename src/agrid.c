@@ -491,25 +491,36 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     int status = build_level0(g, lev);
     if (!status) status = eval_nodes(&job, 0, nthreads);
     long total = (long)lev[0].nnodes;
+    double *pcrit = NULL; /* criterion value of each refined cell of level l - 1 (others: unset) */
     for (int l = 0; !status; ++l) {
         shl__alevel *L = lev + l;
         if (st->budget_hit || l + 1 >= g->max_levels) { /* no refinement can follow: not estimated */
             st->unresolved = -1;
             break;
         }
-        double *est = shl__malloc(L->ncells * sizeof *est);
+        double *est = shl__malloc(L->ncells * sizeof *est), *crit = shl__malloc(L->ncells * sizeof *crit);
         ranked *flagged = shl__malloc(L->ncells * sizeof *flagged);
         uint32_t *which = shl__malloc(L->ncells * sizeof *which);
-        if (!est || !flagged || !which) status = SHL_ENOMEM;
+        if (!est || !crit || !flagged || !which) status = SHL_ENOMEM;
         size_t nw = 0, nf = 0, done = 0;
         /* Estimated: level 0's cells and the children of refined cells (all corners
          * flagged: every child of a level-(l-1) cell has its centre as a corner, flagged
-         * only if it was refined).  A ring cell lies in an unrefined level-(l-1) cell
-         * (estimate within tol) and inherits its verdict: the field there was resolved
-         * one level coarser (the refinement's error does not grow; a ring cell's A is
-         * a convex combination of the two levels). */
-        for (size_t c = 0; !status && c < L->ncells; ++c)
-            if (L->cell[c].flags == 0xFF) which[nw++] = (uint32_t)c;
+         * only if it was refined), under the assumption that refining does not increase
+         * the estimate e: a ring cell lies in an unrefined level-(l-1) cell (criterion
+         * within tol) and inherits its verdict (a ring cell's A is a convex combination
+         * of the two levels); for SHL_AGRID_MEAN a child's criterion is then at most its
+         * parent's / 8 (the volume), so the children of a parent with criterion
+         * <= 8 tol are not estimated either (one-level look-ahead). */
+        for (size_t c = 0; !status && c < L->ncells; ++c) {
+            if (L->cell[c].flags != 0xFF) continue;
+            if (l > 0 && g->criterion == SHL_AGRID_MEAN) {
+                int ci[3];
+                unkey(L->cell_key[c], ci);
+                for (int a = 0; a < 3; ++a) ci[a] >>= 1;
+                if (pcrit[hfind(&lev[l - 1].cells, key3(ci))] <= 8.0 * g->tol) continue;
+            }
+            which[nw++] = (uint32_t)c;
+        }
         if (!status) status = estimate_cells(&job, l, which, nw, est, nthreads);
         if (!status) {
             st->samples += SAMPLES * (long)nw;
@@ -530,6 +541,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                     status = r < 0 ? r : SHL_OK;
                     break;
                 }
+                crit[flagged[done].cell] = flagged[done].e;
             }
             if (!status && F->ncells == 0) {
                 level_free(F);
@@ -543,10 +555,13 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         shl__free(est);
         shl__free(flagged);
         shl__free(which);
+        shl__free(pcrit);
+        pcrit = crit;
         if (status || *nl == l + 1) break;
         resolve_cells(lev + l + 1, 0);
         status = eval_nodes(&job, l + 1, nthreads);
     }
+    shl__free(pcrit);
     if (!status) {
         for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
         fill_stats(g, lev, *nl, st);
