@@ -1,9 +1,10 @@
 /* Adaptive multi-level SH grids (include/shlight.h, shl_agrid_*): levels of
  * sparse uniform lattices refined where an a-posteriori estimate (the interpolant
- * against the float light-set batch at two points per cell) exceeds the
- * tolerance, blended into a C0 interpolant; each level is Wu 2020 Alg. 4 on its
- * cells.  The estimate is one function (estimate_cells) over the cells of a level:
- * an a-priori one (e.g. from analytic Hessians) would replace it there. */
+ * against the float light-set batch at two points per cell, for level 0 and the
+ * children of refined cells) exceeds the tolerance, blended into a C0
+ * interpolant; each level is Wu 2020 Alg. 4 on its cells.  The estimate is one
+ * function (estimate_cells) over a list of cells of a level: an a-priori one
+ * (e.g. from analytic Hessians) would replace it there. */
 #include "agrid.h"
 #include "lights.h"
 #include "parallel.h"
