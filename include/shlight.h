@@ -320,7 +320,8 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * (coefficients and gradients, layouts of shl_lights_eval) filled through the float
  * SIMD light-set batch; interpolated with Wu 2020 Alg. 4 (tricubic Hermite) per level.
  *
- * Refinement (shl_agrid_fill): every cell of level l gets the estimate
+ * Refinement (shl_agrid_fill): every cell of level 0, and every cell of level l >= 1
+ * that is a child of a refined cell, gets the estimate
  *   e = max over its two samples s = lo + (c + q) h_l, q = (1/4, 1/4, 1/4) and (3/4, 3/4, 3/4),
  *       and over the colours, of || A(s) - L(s) ||_2 over the nc coefficients,
  * A the adaptive interpolant built so far and L the light set by the float batch
@@ -337,7 +338,11 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * count stays <= max_nodes (ring included, below); the refinement is breadth-first
  * (level by level), so a tight budget goes to the coarser levels first.  A level
  * from which no refinement can follow (the budget was hit, or the finest level
- * allowed) is not estimated.
+ * allowed) is not estimated.  Assuming that refinement does not increase e, some
+ * cells keep a verdict instead of being estimated (and are never refined): the ring
+ * cells of level l >= 1 (below; each lies in an unrefined level-(l-1) cell, criterion
+ * within tol) and, for SHL_AGRID_MEAN, the children of a cell whose criterion was
+ * <= 8 tol (a child's is then <= tol: one eighth the volume).
  * An a-posteriori estimate is a measurement at two points per cell, not a bound:
  * the error elsewhere in a cell may exceed it (tests/test_agrid.c measures the
  * ratio at random points), and a feature smaller than a cell (a light's edge, a
@@ -399,7 +404,7 @@ void shl_agrid_destroy(shl_agrid *grid);
  * on 1 <= nthreads <= SHL_MAX_THREADS threads (else SHL_EDOMAIN); the result does
  * not depend on nthreads, bit for bit.  Errors (SHL_ENULL, SHL_ENOMEM, SHL_ETHREAD)
  * leave the grid unchanged.  Cost: one light-set evaluation with gradients per node
- * and two without per cell estimated.
+ * and two without per cell estimated (stats.samples counts the latter).
  */
 int shl_agrid_fill(shl_agrid *grid, const shl_lights *lights, int nthreads);
 /**

@@ -1,9 +1,10 @@
 /* Adaptive multi-level SH grids (include/shlight.h, shl_agrid_*): levels of
  * sparse uniform lattices refined where an a-posteriori estimate (the interpolant
- * against the float light-set batch at two points per cell) exceeds the
- * tolerance, blended into a C0 interpolant; each level is Wu 2020 Alg. 4 on its
- * cells.  The estimate is one function (estimate_cells) over the cells of a level:
- * an a-priori one (e.g. from analytic Hessians) would replace it there. */
+ * against the float light-set batch at two points per cell, for level 0 and the
+ * children of refined cells) exceeds the tolerance, blended into a C0
+ * interpolant; each level is Wu 2020 Alg. 4 on its cells.  The estimate is one
+ * function (estimate_cells) over a list of cells of a level: an a-priori one
+ * (e.g. from analytic Hessians) would replace it there. */
 #include "agrid.h"
 #include "lights.h"
 #include "parallel.h"
@@ -305,7 +306,9 @@ typedef struct {
     shl_ctx ctx;
     shl__alevel *lev;
     int l;              /* the level worked on */
-    double *est;        /* estimate_cells: per cell of level l */
+    const uint32_t *which; /* estimate_cells: the cells of level l estimated, */
+    size_t nwhich;      /* nwhich of them, */
+    double *est;        /* and their estimates (est[k] for cell which[k]) */
     char *ws;
     size_t stride, batch_bytes;
 } fill_job;
@@ -332,7 +335,7 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     }
 }
 
-/* The estimate of every cell of level l (include/shlight.h): A of levels 0..l
+/* The estimate of the cells job->which of level l (include/shlight.h): A of levels 0..l
  * against the float batch (values only) at the samples lo + (c + q) h, q = 1/4 and 3/4
  * on every axis, both rounded to float. */
 static void estimate_range(void *arg, int worker, long begin, long end)
@@ -345,11 +348,11 @@ static void estimate_range(void *arg, int worker, long begin, long end)
     float *rgb = (float *)(void *)(w + shl__ws_stride(job->batch_bytes)), pts[3 * BLOCK];
     double *a = (double *)(void *)(rgb + BLOCK * nv), *tmp = a + nv;
     for (long b = begin; b < end; ++b) {
-        const size_t c0 = (size_t)b * (BLOCK / SAMPLES), left = L->ncells - c0;
+        const size_t c0 = (size_t)b * (BLOCK / SAMPLES), left = job->nwhich - c0;
         const int mc = left < BLOCK / SAMPLES ? (int)left : BLOCK / SAMPLES;
         for (int j = 0; j < mc; ++j) {
             int c[3];
-            unkey(L->cell_key[c0 + j], c);
+            unkey(L->cell_key[job->which[c0 + j]], c);
             for (int q = 0; q < SAMPLES; ++q)
                 for (int k = 0; k < 3; ++k)
                     pts[3 * (SAMPLES * j + q) + k] = (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
@@ -395,12 +398,15 @@ static int eval_nodes(fill_job *job, int l, int nthreads)
     return run(job, n, nthreads, nodes_range, 0);
 }
 
-static int estimate_cells(fill_job *job, int l, double *est, int nthreads)
+/* The estimates est[k] of the cells which[k], k < n, of level l. */
+static int estimate_cells(fill_job *job, int l, const uint32_t *which, size_t nwhich, double *est, int nthreads)
 {
     job->l = l;
+    job->which = which;
+    job->nwhich = nwhich;
     job->est = est;
     const size_t nv = 3 * (size_t)job->g->nc;
-    const long n = (long)((job->lev[l].ncells + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
+    const long n = (long)((nwhich + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
     return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
 }
 
@@ -480,29 +486,49 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
 static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl__alevel *lev, int *nl,
                  shl_agrid_stats *st)
 {
-    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, NULL, NULL, 0, 0};
+    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, NULL, 0, NULL, NULL, 0, 0};
     job.batch_bytes = shl__lights_batch_f_bytes(&job.ctx, lights, 1); /* >= the values-only size */
     *nl = 1;
     int status = build_level0(g, lev);
     if (!status) status = eval_nodes(&job, 0, nthreads);
     long total = (long)lev[0].nnodes;
+    double *pcrit = NULL; /* criterion value of each refined cell of level l - 1 (others: unset) */
     for (int l = 0; !status; ++l) {
         shl__alevel *L = lev + l;
         if (st->budget_hit || l + 1 >= g->max_levels) { /* no refinement can follow: not estimated */
             st->unresolved = -1;
             break;
         }
-        double *est = shl__malloc(L->ncells * sizeof *est);
+        double *est = shl__malloc(L->ncells * sizeof *est), *crit = shl__malloc(L->ncells * sizeof *crit);
         ranked *flagged = shl__malloc(L->ncells * sizeof *flagged);
-        if (!est || !flagged) status = SHL_ENOMEM;
-        if (!status) status = estimate_cells(&job, l, est, nthreads);
-        size_t nf = 0, done = 0;
+        uint32_t *which = shl__malloc(L->ncells * sizeof *which);
+        if (!est || !crit || !flagged || !which) status = SHL_ENOMEM;
+        size_t nw = 0, nf = 0, done = 0;
+        /* Estimated: level 0's cells and the children of refined cells (all corners
+         * flagged: every child of a level-(l-1) cell has its centre as a corner, flagged
+         * only if it was refined), under the assumption that refining does not increase
+         * the estimate e: a ring cell lies in an unrefined level-(l-1) cell (criterion
+         * within tol) and inherits its verdict (a ring cell's A is a convex combination
+         * of the two levels); for SHL_AGRID_MEAN a child's criterion is then at most its
+         * parent's / 8 (the volume), so the children of a parent with criterion
+         * <= 8 tol are not estimated either (one-level look-ahead). */
+        for (size_t c = 0; !status && c < L->ncells; ++c) {
+            if (L->cell[c].flags != 0xFF) continue;
+            if (l > 0 && g->criterion == SHL_AGRID_MEAN) {
+                int ci[3];
+                unkey(L->cell_key[c], ci);
+                for (int a = 0; a < 3; ++a) ci[a] >>= 1;
+                if (pcrit[hfind(&lev[l - 1].cells, key3(ci))] <= 8.0 * g->tol) continue;
+            }
+            which[nw++] = (uint32_t)c;
+        }
+        if (!status) status = estimate_cells(&job, l, which, nw, est, nthreads);
         if (!status) {
-            st->samples += SAMPLES * (long)L->ncells;
+            st->samples += SAMPLES * (long)nw;
             const double scale = g->criterion == SHL_AGRID_MEAN ? ldexp(1.0, -3 * l) : 1.0; /* the cell's volume / h_0^3 */
-            for (size_t c = 0; c < L->ncells; ++c)
-                if (est[c] * scale > g->tol) flagged[nf++] = (ranked){est[c] * scale, (uint32_t)c};
-                else st->max_estimate = fmax(st->max_estimate, est[c] * scale);
+            for (size_t k = 0; k < nw; ++k)
+                if (est[k] * scale > g->tol) flagged[nf++] = (ranked){est[k] * scale, which[k]};
+                else st->max_estimate = fmax(st->max_estimate, est[k] * scale);
             qsort(flagged, nf, sizeof *flagged, by_estimate);
         }
         if (!status && nf > 0) {
@@ -516,6 +542,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                     status = r < 0 ? r : SHL_OK;
                     break;
                 }
+                crit[flagged[done].cell] = flagged[done].e;
             }
             if (!status && F->ncells == 0) {
                 level_free(F);
@@ -528,10 +555,14 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         }
         shl__free(est);
         shl__free(flagged);
+        shl__free(which);
+        shl__free(pcrit);
+        pcrit = crit;
         if (status || *nl == l + 1) break;
         resolve_cells(lev + l + 1, 0);
         status = eval_nodes(&job, l + 1, nthreads);
     }
+    shl__free(pcrit);
     if (!status) {
         for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
         fill_stats(g, lev, *nl, st);

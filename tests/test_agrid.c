@@ -227,8 +227,10 @@ SHL_TEST(agrid_threads_and_budget)
  * term odd and a term even under u -> 1-u as |even| + |odd|.  So the error is
  * <= (16/9)^2 tol = 3.2 tol for such cells, plus the float rounding of nodes and of
  * the batch that measured the samples (relative ~1e-6 of |L|, README "Batch
- * evaluation and SIMD").  Blended rings are a convex combination of two levels,
- * each estimated.  The bound is asymptotic (h small against the distance to the
+ * evaluation and SIMD").  Blended rings are a convex combination of two levels:
+ * the coarser estimated there (its cell was not refined), the finer not (ring
+ * cells keep the coarser cell's verdict, include/shlight.h), its error there
+ * expected no larger (h^3 to h^4 smaller for a smooth field).  The bound is asymptotic (h small against the distance to the
  * lights: here >= 0.5 at h <= 0.33), so the test accepts 4 tol + 1e-5 max|L|;
  * it also requires the mean error to be below tol. */
 SHL_TEST(agrid_smooth_within_tolerance)
