@@ -204,9 +204,9 @@ check-csv:
 lobes: $(BUILD)/tools/gen_lobes
 	$(BUILD)/tools/gen_lobes > src/zh_tables.c.new && mv src/zh_tables.c.new src/zh_tables.c
 
-$(BUILD)/tools/gen_lobes: tools/gen_lobes.c src/sh_basis.c src/sh_tables.c
+$(BUILD)/tools/gen_lobes: tools/gen_lobes.c $(STATIC)
 	@mkdir -p $(dir $@)
-	$(CC) $(CSTD) -O2 $(WARN) -Iinclude -Isrc -o $@ tools/gen_lobes.c src/sh_basis.c src/sh_tables.c -lm
+	$(CC) $(CSTD) -O2 $(WARN) -Iinclude -Isrc -o $@ tools/gen_lobes.c $(STATIC) $(LDLIBS)
 
 # Regenerate the real-SH recurrence tables -- see tools/gen_sh_tables.c.
 .PHONY: sh-tables

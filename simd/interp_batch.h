@@ -60,6 +60,22 @@ static void trilinear(const float *const f[8], const shl__interp_point *s, int n
     }
 }
 
+/* The per-channel methods visit 3 channels of ceil(nc / VL) vectors each. */
+static inline void channels_plan(int nc, shl__interp_ahead *ahead)
+{
+    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
+}
+
+/* Channel c's vector at k: steps the prefetch and gives its value offset *vo and
+ * x-gradient offset *go in a row (3 nc values, then 3 nc gradients per channel). */
+static inline void channel_block(int c, int k, int nc, shl__interp_ahead *ahead, size_t *vo, size_t *go)
+{
+    const int i = block_start(k, nc);
+    shl__interp_ahead_step(ahead);
+    *vo = (size_t)c * nc + i;
+    *go = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
+}
+
 /* Annen 2004 Eq. (15): sum_j w_j (c_j + grad c_j . d_j), per channel. */
 static void taylor(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
@@ -68,12 +84,11 @@ static void taylor(const float *const f[8], const shl__interp_point *s, int nc, 
         w[j] = vd_set1(s->w[j]);
         for (int a = 0; a < 3; ++a) wd[j][a] = vd_set1(s->wd[j][a]);
     }
-    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
+    channels_plan(nc, ahead);
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
-            const int i = block_start(k, nc);
-            shl__interp_ahead_step(ahead);
-            const size_t vo = (size_t)c * nc + i, go = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
+            size_t vo, go;
+            channel_block(c, k, nc, ahead, &vo, &go);
             vd o = vd_set1(0.0f);
             for (int j = 0; j < 8; ++j) {
                 o = vd_fma(w[j], vd_load_float(f[j] + vo), o);
@@ -92,12 +107,11 @@ static void hermite(const float *const f[8], const shl__interp_point *s, int nc,
     const vd y0 = vd_set1(s->hw[1][0]), y1 = vd_set1(s->hw[1][1]), y2 = vd_set1(s->hw[1][2]), y3 = vd_set1(s->hw[1][3]);
     const vd z0 = vd_set1(s->hw[2][0]), z1 = vd_set1(s->hw[2][1]), z2 = vd_set1(s->hw[2][2]), z3 = vd_set1(s->hw[2][3]);
     const vd ux = vd_set1(s->u[0]), vx = vd_set1(1.0 - s->u[0]), uy = vd_set1(s->u[1]), vy = vd_set1(1.0 - s->u[1]);
-    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + VL - 1) / VL));
+    channels_plan(nc, ahead);
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < nc; k += VL) {
-            const int i = block_start(k, nc);
-            shl__interp_ahead_step(ahead);
-            const size_t vo = (size_t)c * nc + i, gxo = 3 * (size_t)nc + 3 * (size_t)c * nc + i;
+            size_t vo, gxo;
+            channel_block(c, k, nc, ahead, &vo, &gxo);
             const size_t gyo = gxo + nc, gzo = gxo + 2 * (size_t)nc;
             vd g[4], g_y[4], g_z[4];
             for (int q = 0; q < 4; ++q) { /* lines 4-7: along x, corners 2q and 2q+1 */

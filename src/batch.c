@@ -134,21 +134,38 @@ void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const do
 
 typedef struct {
     const shl_ctx *ctx;
-    const shl__batch_poly *P;
-    const double *verts;
-    int n, npts;
+    shl__batch_eval_fn eval;
+    const void *light;
     const float *pts;
     float *coeffs, *grad;
-    char *ws; /* per worker: stride bytes of kernel workspace */
-    size_t stride;
-} poly_job;
+} batch_job;
 
-static void poly_range(void *arg, int worker, long begin, long end)
+static void batch_range(void *arg, void *ws, long begin, long end)
 {
-    const poly_job *job = arg;
+    const batch_job *job = arg;
     const size_t nc = (size_t)job->ctx->nc, p0 = (size_t)begin;
-    shl__batch_poly_eval(job->ctx, job->P, job->verts, job->n, (int)(end - begin), job->pts + 3 * p0,
-                         job->coeffs + nc * p0, job->grad ? job->grad + 3 * nc * p0 : NULL, job->ws + job->stride * (size_t)worker);
+    job->eval(job->ctx, job->light, (int)(end - begin), job->pts + 3 * p0, job->coeffs + nc * p0,
+              job->grad ? job->grad + 3 * nc * p0 : NULL, ws);
+}
+
+int shl__batch_run(const shl_ctx *ctx, shl__batch_eval_fn eval, const void *light, size_t work_bytes, int npts,
+                   const float *pts, float *coeffs, float *grad, int nthreads)
+{
+    batch_job job = {ctx, eval, light, pts, coeffs, grad};
+    return shl__parallel_for_ws(npts, SHL__BATCH_BLOCK, nthreads, work_bytes, batch_range, &job);
+}
+
+typedef struct {
+    const shl__batch_poly *P;
+    const double *verts;
+    int n;
+} poly_light;
+
+static void poly_eval(const shl_ctx *ctx, const void *light, int npts, const float *pts, float *coeffs, float *grad,
+                      void *work)
+{
+    const poly_light *L = light;
+    shl__batch_poly_eval(ctx, L->P, L->verts, L->n, npts, pts, coeffs, grad, work);
 }
 
 int shl_polygon_batch_f_mt(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts, float *coeffs,
@@ -165,13 +182,9 @@ int shl_polygon_batch_f_mt(const shl_ctx *ctx, const float *verts, int n, int np
     for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
     shl__batch_poly P;
     shl__batch_poly_prepare(vd, n, &P);
-    /* blocks of SHL__BATCH_BLOCK points (the last may be shorter), the same for every thread count */
-    const int nw = shl__parallel_workers(npts, SHL__BATCH_BLOCK, nthreads);
-    poly_job job = {ctx, &P, vd, n, npts, pts, coeffs, grad, NULL, shl__ws_stride(ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL))};
-    if (!(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM;
-    const int st = shl__parallel_for(npts, SHL__BATCH_BLOCK, nw, poly_range, &job); /* SHL_ETHREAD: nothing written */
-    shl__free(job.ws);
-    return st;
+    const poly_light L = {&P, vd, n};
+    return shl__batch_run(ctx, poly_eval, &L, ctx->isa->poly_work_bytes(ctx->lmax, grad != NULL), npts, pts, coeffs,
+                          grad, nthreads);
 }
 
 int shl_polygon_batch_f(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts,

@@ -94,6 +94,17 @@ static inline void shl__cross3(const double a[3], const double b[3], double out[
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
+/* Fan triangle (p_0, p_t, p_t+1) of the points p: its edges ab = p_t - p_0 and
+ * bc = p_t+1 - p_t, and c = ab x bc, twice its vector area. */
+static inline void shl__fan_triangle(const double (*p)[3], int t, double ab[3], double bc[3], double c[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = p[t][k] - p[0][k];
+        bc[k] = p[t + 1][k] - p[t][k];
+    }
+    shl__cross3(ab, bc, c);
+}
+
 /* out = in / |in| for a finite, non-zero vector, scaled first so that the norm
  * neither overflows nor underflows.  Returns SHL_ENONFINITE / SHL_EDOMAIN. */
 static inline int shl__unit(const double in[3], double out[3])

@@ -55,11 +55,7 @@ static double area_rule(const clip_poly *p, const double nrm[3], const double pn
     double total = 0.0;
     for (int t = 1; t + 1 < p->n; ++t) {
         double ab[3], bc[3], c[3];
-        for (int k = 0; k < 3; ++k) {
-            ab[k] = p->off[t][k] - p->off[0][k];
-            bc[k] = p->off[t + 1][k] - p->off[t][k];
-        }
-        shl__cross3(ab, bc, c);
+        shl__fan_triangle(p->off, t, ab, bc, c);
         const double area2 = shl__dot3(pnrm, c); /* twice the signed area */
         double tri = 0.0;
         for (int i = 0; i < NGAUSS; ++i) {

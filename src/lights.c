@@ -94,10 +94,8 @@ static int light_zh(const shl_lights *lights, const shl__light *li, int lmax, co
 {
     switch (li->kind) {
     case SHL__LIGHT_POLYGON: {
-        const double *v = lights->verts + li->vofs;
-        if (!li->two_sided && !(shl__light_front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
         shl__poly_geom g;
-        shl__poly_geom_init(&g, x, v, li->n);
+        if (!shl__light_poly_geom(lights, li, x, &g)) return 0;
         if (with_grad) {
             shl__poly_zh_grad_d(&g, lmax, zh, zh + SHL__ZH_BLOCK);
             for (int a = 1; a <= 3; ++a) /* lobes d <= 2 lmax, bands l <= lmax of each block */

@@ -3,6 +3,7 @@
 #define SHL_LIGHTS_H
 
 #include "internal.h"
+#include "polygon.h"
 
 /* Kind tag of a light record; each kind has a case in light_zh() (lights.c). */
 enum { SHL__LIGHT_POLYGON = 1, SHL__LIGHT_SPHERE = 2 };
@@ -29,6 +30,17 @@ struct shl_lights {
  * scaled by a power of two (internal.h): the sign of the unscaled formula
  * wherever that does not over/underflow; x receives li (one-sided) iff > 0. */
 double shl__light_front_distance(const shl__light *li, const double *v0, const double x[3]);
+
+/* The geometry of polygon light li seen from x into g; 0 (g not set) if li is
+ * one-sided and x is behind it or in its plane. */
+static inline int shl__light_poly_geom(const shl_lights *lights, const shl__light *li, const double x[3],
+                                       shl__poly_geom *g)
+{
+    const double *v = lights->verts + li->vofs;
+    if (!li->two_sided && !(shl__light_front_distance(li, v, x) > 0.0)) return 0;
+    shl__poly_geom_init(g, x, v, li->n);
+    return 1;
+}
 
 /* Doubles of workspace shl__lights_eval needs at lmax. */
 size_t shl__lights_ws_size(int lmax);

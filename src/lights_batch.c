@@ -105,15 +105,12 @@ typedef struct {
     long npts;
     const float *pts;
     float *rgb, *grad;
-    char *ws; /* per worker: stride bytes (NULL for an empty set) */
-    size_t stride;
 } batch_f_job;
 
-static void batch_f_range(void *arg, int worker, long begin, long end)
+static void batch_f_range(void *arg, void *buf, long begin, long end) /* buf: NULL for an empty set */
 {
     const batch_f_job *job = arg;
     const size_t nc = (size_t)job->ctx->nc;
-    void *buf = job->ws ? job->ws + job->stride * (size_t)worker : NULL;
     for (long b = begin; b < end; ++b) {
         const size_t p0 = (size_t)b * CHUNK;
         const int m = job->npts - (long)p0 < CHUNK ? (int)(job->npts - (long)p0) : CHUNK;
@@ -131,12 +128,9 @@ int shl_lights_eval_batch_f_mt(const shl_ctx *ctx, const shl_lights *lights, int
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
     const long nblocks = (npts + CHUNK - 1) / CHUNK;
-    const int nw = shl__parallel_workers(nblocks, 1, nthreads);
-    batch_f_job job = {ctx, lights, npts, pts, rgb, grad, NULL, shl__ws_stride(shl__lights_batch_f_bytes(ctx, lights, grad != NULL))};
-    if (job.stride > 0 && !(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM; /* before anything is written */
-    const int st = shl__parallel_for(nblocks, 1, nw, batch_f_range, &job); /* SHL_ETHREAD: nothing written */
-    shl__free(job.ws);
-    return st;
+    batch_f_job job = {ctx, lights, npts, pts, rgb, grad};
+    return shl__parallel_for_ws(nblocks, 1, nthreads, shl__lights_batch_f_bytes(ctx, lights, grad != NULL), batch_f_range,
+                                &job); /* SHL_ENOMEM, SHL_ETHREAD: nothing written */
 }
 
 int shl_lights_eval_batch_f(const shl_ctx *ctx, const shl_lights *lights, int npts, const float *pts, float *rgb,
@@ -151,14 +145,13 @@ typedef struct {
     const shl_lights *lights;
     int lmax;
     const double *pts;
-    double *rgb, *grad, *ws; /* ws: per worker, shl__lights_ws_size(lmax) doubles */
+    double *rgb, *grad;
 } batch_job;
 
-static void batch_range(void *arg, int worker, long begin, long end)
+static void batch_range(void *arg, void *ws, long begin, long end) /* ws: shl__lights_ws_size(lmax) doubles */
 {
     const batch_job *job = arg;
     const size_t nc = (size_t)SHL_NCOEFFS(job->lmax);
-    double *ws = job->ws + shl__lights_ws_size(job->lmax) * (size_t)worker;
     for (long p = begin; p < end; ++p)
         shl__lights_eval(job->lights, job->lmax, ws, job->pts + 3 * (size_t)p, job->rgb + 3 * nc * (size_t)p,
                          job->grad ? job->grad + 9 * nc * (size_t)p : NULL);
@@ -171,13 +164,9 @@ int shl_lights_eval_batch_mt(const shl_ctx *ctx, const shl_lights *lights, int n
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
-    const int nw = shl__parallel_workers(npts, 1, nthreads);
-    batch_job job = {lights, ctx->lmax, pts, rgb, grad, NULL};
-    job.ws = shl__malloc(sizeof(double) * shl__lights_ws_size(ctx->lmax) * (size_t)nw);
-    if (!job.ws) return SHL_ENOMEM;
-    const int st = shl__parallel_for(npts, 1, nw, batch_range, &job); /* SHL_ETHREAD: nothing written */
-    shl__free(job.ws);
-    return st;
+    batch_job job = {lights, ctx->lmax, pts, rgb, grad};
+    return shl__parallel_for_ws(npts, 1, nthreads, sizeof(double) * shl__lights_ws_size(ctx->lmax), batch_range,
+                                &job); /* SHL_ENOMEM, SHL_ETHREAD: nothing written */
 }
 
 int shl_lights_eval_batch(const shl_ctx *ctx, const shl_lights *lights, int npts, const double *pts, double *rgb,

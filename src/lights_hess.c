@@ -17,10 +17,8 @@ static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lma
 {
     switch (li->kind) {
     case SHL__LIGHT_POLYGON: {
-        const double *v = lights->verts + li->vofs;
-        if (!li->two_sided && !(shl__light_front_distance(li, v, x) > 0.0)) return 0; /* behind or in its plane */
         shl__poly_geom g;
-        shl__poly_geom_init(&g, x, v, li->n);
+        if (!shl__light_poly_geom(lights, li, x, &g)) return 0;
         const int fold = shl__poly_hess_fold(&g);
         shl__poly_zh_hess_d(&g, lmax, z10, fold);
         if (!fold) /* gradient: 2^-E once, Hessian: twice */

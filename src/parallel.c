@@ -89,3 +89,26 @@ int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *
     pthread_mutex_destroy(&p.lock);
     return ok ? SHL_OK : SHL_ETHREAD;
 }
+
+typedef struct {
+    shl__ws_range_fn fn;
+    void *arg;
+    char *ws; /* per worker: stride bytes (NULL if none) */
+    size_t stride;
+} ws_job;
+
+static void ws_range(void *arg, int worker, long begin, long end)
+{
+    const ws_job *job = arg;
+    job->fn(job->arg, job->ws ? job->ws + job->stride * (size_t)worker : NULL, begin, end);
+}
+
+int shl__parallel_for_ws(long n, long grain, int nthreads, size_t ws_bytes, shl__ws_range_fn fn, void *arg)
+{
+    const int nw = shl__parallel_workers(n, grain, nthreads);
+    ws_job job = {fn, arg, NULL, shl__ws_stride(ws_bytes)};
+    if (job.stride > 0 && !(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM;
+    const int st = shl__parallel_for(n, grain, nw, ws_range, &job);
+    shl__free(job.ws);
+    return st;
+}

@@ -17,9 +17,29 @@ int shl__parallel_workers(long n, long grain, int nthreads);
  * fn, are joined, and SHL_ETHREAD is returned (fn never ran). */
 int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg);
 
+/* Work on items [begin, end) with the worker's own scratch ws (NULL if none). */
+typedef void (*shl__ws_range_fn)(void *arg, void *ws, long begin, long end);
+
+/* shl__parallel_for on shl__parallel_workers(n, grain, nthreads) workers, each
+ * with its own ws_bytes of scratch (one allocation, freed on return; none if
+ * ws_bytes is 0).  SHL_ENOMEM or SHL_ETHREAD: fn never ran. */
+int shl__parallel_for_ws(long n, long grain, int nthreads, size_t ws_bytes, shl__ws_range_fn fn, void *arg);
+
 /* Points per block of the single-light batch entry points (batch.c, sphere_batch.c):
  * a multiple of every vector length, so that blocks split no vector. */
 enum { SHL__BATCH_BLOCK = 256 };
+
+/* One light at npts points: outputs of point p at coeffs + nc p and grad + 3 nc p
+ * (grad may be NULL); work: the work_bytes of shl__batch_run. */
+typedef void (*shl__batch_eval_fn)(const shl_ctx *ctx, const void *light, int npts, const float *pts, float *coeffs,
+                                   float *grad, void *work);
+
+/* src/batch.c: the threaded part of a single-light batch entry point (arguments
+ * checked, npts > 0): eval over blocks of SHL__BATCH_BLOCK points (the last may
+ * be shorter, the same blocks for every thread count) on up to nthreads workers,
+ * each with work_bytes of workspace.  SHL_ENOMEM or SHL_ETHREAD: nothing written. */
+int shl__batch_run(const shl_ctx *ctx, shl__batch_eval_fn eval, const void *light, size_t work_bytes, int npts,
+                   const float *pts, float *coeffs, float *grad, int nthreads);
 
 /* Stride of per-worker scratch slices of `bytes` in one allocation (64-byte multiples). */
 static inline size_t shl__ws_stride(size_t bytes) { return (bytes + 63) / 64 * 64; }

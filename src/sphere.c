@@ -1,15 +1,13 @@
 /* Spherical lights (Mezieres et al. 2022, HVL Sec. 4.2): the SH projection of
  * the cap subtended by a sphere, its gradient, and the public entry points.
- * The kernels are in sphere_impl.h, instantiated for double and float. */
+ * The kernels and the public entry points are in sphere_impl.h, instantiated for
+ * double and float. */
 #include "sphere.h"
 
 /* Bands with an unrolled value kernel (sphere_small in sphere_impl.h). */
 #define SHL__SPHERE_SMALL 5
 #define SHL__ALWAYS_INLINE __attribute__((always_inline)) inline
 #define SHL__NOINLINE __attribute__((noinline))
-
-#define SHL_REAL_IMPL "sphere_impl.h"
-#include "real_instances.h"
 
 /* Every non-zero |v_k| and a in [2^-100, 2^100): every product, square and quotient
  * of the set-up below is a normal double both unscaled and in scaled units, so the
@@ -98,110 +96,8 @@ static int check_radius(double radius)
     return radius > 0.0 ? SHL_OK : SHL_EDOMAIN;
 }
 
-/* The rest of the entry points (sphere_d, sphere_f): argument checks unless
- * moderate, shl__sphere_geom_init, shl__sphere_sh; out of line, so that the common
- * paths need no frame for it. */
-static SHL__NOINLINE int sphere_general_d(int lmax, const double x[3], const double center[3], double radius,
-                                          double *coeffs, double *grad, int mod)
-{
-    if (!mod) {
-        if (shl__check_finite(x, 3) || shl__check_finite(center, 3)) return SHL_ENONFINITE;
-        const int st = check_radius(radius);
-        if (st) return st;
-    }
-    shl__sphere_geom g;
-    shl__sphere_geom_init(&g, x, center, radius);
-    shl__sphere_sh_d(lmax, &g, coeffs, grad);
-    return SHL_OK;
-}
-
-static SHL__NOINLINE int sphere_general_f(int lmax, const float x[3], const float center[3], float radius,
-                                          float *coeffs, float *grad, int mod)
-{
-    if (!mod) {
-        if (shl__check_finite_f(x, 3) || shl__check_finite_f(center, 3)) return SHL_ENONFINITE;
-        const int st = check_radius(radius);
-        if (st) return st;
-    }
-    const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
-    shl__sphere_geom g;
-    shl__sphere_geom_init(&g, xd, cd, radius);
-    shl__sphere_sh_f(lmax, &g, coeffs, grad);
-    return SHL_OK;
-}
-
-/* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
- * so in the common case no further check is needed and no scaling (the exponent e
- * of shl__sphere_geom_init is 0); coefficients without gradient, and with it up to
- * band SHL__SPHERE_SMALL, then take their geometry to the kernels in registers (the
- * address of g is never taken). */
-static SHL__ALWAYS_INLINE int sphere_d(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
-                                       double *coeffs, double *grad, int want_grad)
-{
-    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
-    const double vs[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
-    const int mod = moderate(vs, radius);
-    if (mod && !want_grad) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        sphere_value_d(ctx->lmax, &g, coeffs);
-        return SHL_OK;
-    }
-    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        sphere_grad_small_d(ctx->lmax, &g, coeffs, grad);
-        return SHL_OK;
-    }
-    return sphere_general_d(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
-}
-
-/* As sphere_d; the geometry in double from the float arguments (exact). */
-static SHL__ALWAYS_INLINE int sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
-                                       float *coeffs, float *grad, int want_grad)
-{
-    if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
-    const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
-    const double vs[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
-    const int mod = moderate(vs, radius);
-    if (mod && !want_grad) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        sphere_value_f(ctx->lmax, &g, coeffs);
-        return SHL_OK;
-    }
-    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        sphere_grad_small_f(ctx->lmax, &g, coeffs, grad);
-        return SHL_OK;
-    }
-    return sphere_general_f(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
-}
-
-int shl_sphere(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
-               double *coeffs)
-{
-    return sphere_d(ctx, x, center, radius, coeffs, NULL, 0);
-}
-
-int shl_sphere_grad(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
-                    double *coeffs, double *grad)
-{
-    return sphere_d(ctx, x, center, radius, coeffs, grad, 1);
-}
-
-int shl_sphere_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
-                 float *coeffs)
-{
-    return sphere_f(ctx, x, center, radius, coeffs, NULL, 0);
-}
-
-int shl_sphere_grad_f(const shl_ctx *ctx, const float x[3], const float center[3], float radius,
-                      float *coeffs, float *grad)
-{
-    return sphere_f(ctx, x, center, radius, coeffs, grad, 1);
-}
+#define SHL_REAL_IMPL "sphere_impl.h"
+#include "real_instances.h"
 
 int shl_zh_cap(int lmax, double half_angle, double *zh)
 {

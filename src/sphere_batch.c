@@ -38,21 +38,14 @@ void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double r
 }
 
 typedef struct {
-    const shl_ctx *ctx;
     double center[3], radius;
-    const float *pts;
-    float *coeffs, *grad;
-    char *ws; /* per worker: stride bytes of kernel workspace */
-    size_t stride;
-} sphere_job;
+} sphere_light;
 
-static void sphere_range(void *arg, int worker, long begin, long end)
+static void sphere_eval(const shl_ctx *ctx, const void *light, int npts, const float *pts, float *coeffs, float *grad,
+                        void *work)
 {
-    const sphere_job *job = arg;
-    const size_t nc = (size_t)job->ctx->nc, p0 = (size_t)begin;
-    shl__batch_sphere_eval(job->ctx, job->center, job->radius, (int)(end - begin), job->pts + 3 * p0,
-                           job->coeffs + nc * p0, job->grad ? job->grad + 3 * nc * p0 : NULL,
-                           job->ws + job->stride * (size_t)worker);
+    const sphere_light *s = light;
+    shl__batch_sphere_eval(ctx, s->center, s->radius, npts, pts, coeffs, grad, work);
 }
 
 int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,
@@ -65,14 +58,9 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
-    /* blocks of SHL__BATCH_BLOCK points (the last may be shorter), the same for every thread count */
-    const int nw = shl__parallel_workers(npts, SHL__BATCH_BLOCK, nthreads);
-    sphere_job job = {ctx, {center[0], center[1], center[2]}, radius, pts, coeffs, grad, NULL,
-                      shl__ws_stride(ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL))};
-    if (!(job.ws = shl__malloc(job.stride * (size_t)nw))) return SHL_ENOMEM;
-    const int st = shl__parallel_for(npts, SHL__BATCH_BLOCK, nw, sphere_range, &job); /* SHL_ETHREAD: nothing written */
-    shl__free(job.ws);
-    return st;
+    const sphere_light s = {{center[0], center[1], center[2]}, radius};
+    return shl__batch_run(ctx, sphere_eval, &s, ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL), npts, pts, coeffs,
+                          grad, nthreads);
 }
 
 int shl_sphere_batch_f(const shl_ctx *ctx, const float center[3], float radius, int npts, const float *pts,

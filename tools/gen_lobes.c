@@ -388,21 +388,11 @@ static void print_values(const double *v, int n)
     for (int i = 0; i < n; ++i) printf("%s%.17g,%s", i % 4 ? " " : "    ", v[i], i % 4 == 3 || i == n - 1 ? "\n" : "");
 }
 
-/* v as a float literal of 9 significant digits, which reads back as exactly the float v. */
-static void print_f(float v, const char *after)
+/* v[i] as X(v[i]), four to a line, each line continuing a macro definition. */
+static void print_list(const double *v, int n)
 {
-    char buf[32];
-    snprintf(buf, sizeof buf, "%.9g", (double)v);
-    printf("%s%sf%s", buf, strpbrk(buf, ".e") ? "" : ".", after);
-}
-
-/* (float)v[i], four to a line. */
-static void print_values_f(const double *v, int n)
-{
-    for (int i = 0; i < n; ++i) {
-        printf("%s", i % 4 ? " " : "    ");
-        print_f((float)v[i], i % 4 == 3 || i == n - 1 ? ",\n" : ",");
-    }
+    for (int i = 0; i < n; ++i)
+        printf("%sX(%.17g),%s", i % 4 ? " " : "    ", v[i], i % 4 == 3 || i == n - 1 ? " \\\n" : "");
 }
 
 int main(void)
@@ -495,38 +485,31 @@ int main(void)
            " * cond(A_l), A_l[d][m] = Y_lm(dir[d]), d < 2l+1, for l = 0..%d (max %.4f):\n *",
            LMAX, best);
     for (int l = 0; l <= LMAX; ++l) printf(" %.2f%s", cond[l], l == LMAX ? "\n" : l % 10 == 9 ? "\n *" : "");
-    printf(" */\n#include \"zh_tables.h\"\n\nconst double shl__zh_dir[SHL__ZH_NDIR][3] = {\n");
-    for (int d = 0; d < SHL__ZH_NDIR; ++d) printf("    {%.17g, %.17g, %.17g},\n", dir[d][0], dir[d][1], dir[d][2]);
-    printf("};\n\nconst double shl__zh_even_w[SHL__ZH_EVEN_SIZE] = {\n");
+    /* Each list once, instantiated as double and as its float rounding (the float kernels'
+     * copies: simd/, src/polygon.c); a double literal converted to float is the float
+     * rounding of the double it denotes. */
+    printf(" */\n#include \"zh_tables.h\"\n\n#define DIR_LIST(X) \\\n");
+    for (int d = 0; d < SHL__ZH_NDIR; ++d)
+        printf("    {X(%.17g), X(%.17g), X(%.17g)}, \\\n", dir[d][0], dir[d][1], dir[d][2]);
+    printf("\n#define EVEN_LIST(X) \\\n");
     for (int l = 0; l <= LMAX; ++l) {
-        printf("    /* l = %d */\n", l);
-        print_values(even_w + SHL__ZH_EVEN_OFS(l), (l + 1) * (l + 1));
+        printf("    /* l = %d */ \\\n", l);
+        print_list(even_w + SHL__ZH_EVEN_OFS(l), (l + 1) * (l + 1));
     }
-    printf("};\n\nconst double shl__zh_odd_w[SHL__ZH_ODD_SIZE] = {\n");
+    printf("\n#define ODD_LIST(X) \\\n");
     for (int l = 1; l <= LMAX; ++l) {
-        printf("    /* l = %d */\n", l);
-        print_values(odd_w + SHL__ZH_ODD_OFS(l), l * l);
+        printf("    /* l = %d */ \\\n", l);
+        print_list(odd_w + SHL__ZH_ODD_OFS(l), l * l);
     }
-    printf("};\n\nconst double shl__zh_cond[SHL_LMAX_MAX + 1] = {\n");
+    printf("\n#define AS_DOUBLE(v) v\n#define AS_FLOAT(v) (float)(v)\n\n"
+           "const double shl__zh_dir[SHL__ZH_NDIR][3] = {DIR_LIST(AS_DOUBLE)};\n"
+           "const double shl__zh_even_w[SHL__ZH_EVEN_SIZE] = {EVEN_LIST(AS_DOUBLE)};\n"
+           "const double shl__zh_odd_w[SHL__ZH_ODD_SIZE] = {ODD_LIST(AS_DOUBLE)};\n"
+           "const float shl__zh_dir_f[SHL__ZH_NDIR][3] = {DIR_LIST(AS_FLOAT)};\n"
+           "const float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE] = {EVEN_LIST(AS_FLOAT)};\n"
+           "const float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE] = {ODD_LIST(AS_FLOAT)};\n\n"
+           "const double shl__zh_cond[SHL_LMAX_MAX + 1] = {\n");
     print_values(cond, NB);
-    /* The float copies used by the float kernels (simd/, src/polygon.c): (float) of the doubles above. */
-    printf("};\n\nconst float shl__zh_dir_f[SHL__ZH_NDIR][3] = {\n");
-    for (int d = 0; d < SHL__ZH_NDIR; ++d) {
-        printf("    {");
-        print_f((float)dir[d][0], ", ");
-        print_f((float)dir[d][1], ", ");
-        print_f((float)dir[d][2], "},\n");
-    }
-    printf("};\n\nconst float shl__zh_even_w_f[SHL__ZH_EVEN_SIZE] = {\n");
-    for (int l = 0; l <= LMAX; ++l) {
-        printf("    /* l = %d */\n", l);
-        print_values_f(even_w + SHL__ZH_EVEN_OFS(l), (l + 1) * (l + 1));
-    }
-    printf("};\n\nconst float shl__zh_odd_w_f[SHL__ZH_ODD_SIZE] = {\n");
-    for (int l = 1; l <= LMAX; ++l) {
-        printf("    /* l = %d */\n", l);
-        print_values_f(odd_w + SHL__ZH_ODD_OFS(l), l * l);
-    }
     printf("};\n");
     return 0;
 }

@@ -29,21 +29,40 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static void emit(const char *type, const char *name, const char *size, const double *v, int n)
+/* 9 (17) significant digits identify a float (double) exactly. */
+static void print_value(const char *fmt, double v)
+{
+    if (v == 0.0)
+        printf(" 0,");
+    else
+        printf(fmt, v);
+}
+
+/* One table of its own (the diagonals: the float one is not the rounding of the double one). */
+static void emit(const char *type, const char *name, const double *v, int n)
 {
     const int is_float = type[0] == 'f';
-    printf("\nconst %s %s[%s] = {", type, name, size);
+    printf("\nconst %s %s[SHL_LMAX_MAX + 1] = {", type, name);
     for (int i = 0; i < n; ++i) {
         if (i % 4 == 0) printf("\n   ");
-        /* 9 (17) significant digits identify a float (double) exactly */
-        if (v[i] == 0.0)
-            printf(" 0,");
-        else if (is_float)
-            printf(" %.9g,", (double)(float)v[i]);
-        else
-            printf(" %.17g,", v[i]);
+        print_value(is_float ? " %.9g," : " %.17g,", is_float ? (double)(float)v[i] : v[i]);
     }
     printf("\n};\n");
+}
+
+/* A table whose float copy is the float rounding of the double one: its values
+ * once, as the list macro `list`(X), instantiated as shl__sh_<name>_d and,
+ * converting each double literal to float, shl__sh_<name>_f. */
+static void emit_pair(const char *name, const char *list, const char *size, const double *v, int n)
+{
+    printf("\n#define %s(X) \\", list);
+    for (int i = 0; i < n; ++i) {
+        if (i % 4 == 0) printf("\n   ");
+        print_value(" X(%.17g),", v[i]);
+        if (i % 4 == 3 || i == n - 1) printf(" \\");
+    }
+    printf("\n\nconst double shl__sh_%s_d[%s] = {%s(AS_DOUBLE)};\n", name, size, list);
+    printf("const float shl__sh_%s_f[%s] = {%s(AS_FLOAT)};\n", name, size, list);
 }
 
 int main(void)
@@ -77,25 +96,17 @@ int main(void)
            " * Real-SH recurrence factors for bands 0..%d (definitions in the generator and\n"
            " * sh_basis.h); index l (l+1) / 2 + m. */\n#include \"sh_basis.h\"\n",
            L);
-    emit("double", "shl__sh_diag_d", "SHL_LMAX_MAX + 1", diag, L + 1);
-    emit("double", "shl__sh_a_d", "SHL__SH_NTRI", a, NTRI);
-    emit("double", "shl__sh_b_d", "SHL__SH_NTRI", b, NTRI);
-    emit("double", "shl__sh_dz_d", "SHL__SH_NTRI", dz, NTRI);
-    emit("double", "shl__sh_k15_d", "SHL_LMAX_MAX + 1", k15, L + 1);
-    emit("double", "shl__sh_lega_d", "SHL_LMAX_MAX + 1", lega, L + 1);
-    emit("double", "shl__sh_legb_d", "SHL_LMAX_MAX + 1", legb, L + 1);
-    emit("double", "shl__sh_capk_d", "SHL_LMAX_MAX + 1", capk, L + 1);
-    emit("double", "shl__sh_one_d", "SHL_LMAX_MAX + 1", one, L + 1);
-    emit("double", "shl__sh_mval_d", "SHL_LMAX_MAX + 1", mval, L + 1);
-    emit("float", "shl__sh_diag_f", "SHL_LMAX_MAX + 1", diag_f, L + 1);
-    emit("float", "shl__sh_a_f", "SHL__SH_NTRI", a, NTRI);
-    emit("float", "shl__sh_b_f", "SHL__SH_NTRI", b, NTRI);
-    emit("float", "shl__sh_dz_f", "SHL__SH_NTRI", dz, NTRI);
-    emit("float", "shl__sh_k15_f", "SHL_LMAX_MAX + 1", k15, L + 1);
-    emit("float", "shl__sh_lega_f", "SHL_LMAX_MAX + 1", lega, L + 1);
-    emit("float", "shl__sh_legb_f", "SHL_LMAX_MAX + 1", legb, L + 1);
-    emit("float", "shl__sh_capk_f", "SHL_LMAX_MAX + 1", capk, L + 1);
-    emit("float", "shl__sh_one_f", "SHL_LMAX_MAX + 1", one, L + 1);
-    emit("float", "shl__sh_mval_f", "SHL_LMAX_MAX + 1", mval, L + 1);
+    emit("double", "shl__sh_diag_d", diag, L + 1);
+    emit("float", "shl__sh_diag_f", diag_f, L + 1);
+    printf("\n#define AS_DOUBLE(v) v\n#define AS_FLOAT(v) (float)(v)\n");
+    emit_pair("a", "A_LIST", "SHL__SH_NTRI", a, NTRI);
+    emit_pair("b", "B_LIST", "SHL__SH_NTRI", b, NTRI);
+    emit_pair("dz", "DZ_LIST", "SHL__SH_NTRI", dz, NTRI);
+    emit_pair("k15", "K15_LIST", "SHL_LMAX_MAX + 1", k15, L + 1);
+    emit_pair("lega", "LEGA_LIST", "SHL_LMAX_MAX + 1", lega, L + 1);
+    emit_pair("legb", "LEGB_LIST", "SHL_LMAX_MAX + 1", legb, L + 1);
+    emit_pair("capk", "CAPK_LIST", "SHL_LMAX_MAX + 1", capk, L + 1);
+    emit_pair("one", "ONE_LIST", "SHL_LMAX_MAX + 1", one, L + 1);
+    emit_pair("mval", "MVAL_LIST", "SHL_LMAX_MAX + 1", mval, L + 1);
     return 0;
 }
