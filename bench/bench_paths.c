@@ -206,7 +206,7 @@ static void run_once(job *j)
 {
     if (j->kind == P_GRID) must(shl_grid_fill(j->grid, j->set, j->nthreads), "grid fill");
     else if (j->kind < 0) must(shl_grid_interp(j->grid, j->interp, 2.0, j->n, j->pts, j->out, j->nthreads), "interp");
-    else if (j->nthreads == 1) per_vertex_range(j, 0, j->n, 0);
+    else if (j->nthreads == 1) per_vertex_range(j, 0, 0, j->n);
     else par_for(j->n, (j->n + 8L * j->nthreads - 1) / (8L * j->nthreads), j->nthreads, per_vertex_range, j);
     if (j->failed) must(j->failed, "per-vertex evaluation");
 }
