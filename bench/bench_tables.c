@@ -1185,16 +1185,6 @@ static const hvl_t2_row hvl_t2_rows[] = {
 };
 enum { HVL_T2_ROWS = sizeof hvl_t2_rows / sizeof hvl_t2_rows[0] };
 
-static int write_file(const char *dir, const char *name, const void *a, size_t size, size_t n)
-{
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    FILE *f = fopen(path, "wb");
-    if (!f) return -1;
-    const int ok = fwrite(a, size, n, f) == n;
-    return fclose(f) == 0 && ok ? 0 : -1;
-}
-
 /* n floats of dir/name into a, or -1. */
 static int read_floats(const char *dir, const char *name, float *a, size_t n)
 {
@@ -1242,7 +1232,7 @@ static int hvl_t2_export(const char *dir, const prt *p, const int *idx, long n)
         st = st || fwrite(g->tri, sizeof(int), 3 * (size_t)g->nt, f) != 3 * (size_t)g->nt;
         st = fclose(f) || st;
     }
-    st = st || write_file(dir, "points.bin", pts, sizeof(double), 9 * (size_t)n);
+    st = st || bench_write_binary(dir, "points.bin", pts, sizeof(double), 9 * (size_t)n);
     free(alb);
     free(pts);
     return st ? -1 : 0;
@@ -1323,7 +1313,7 @@ static void hvl_table2(void)
             float *pv = xmalloc(sizeof(float) * 3 * (size_t)(nvis + 1));
             for (long i = 0; i < nvis; ++i) memcpy(pv + 3 * i, vc[r] + 3 * (size_t)idx[i], sizeof(float) * 3);
             snprintf(name, sizeof name, "%s.bin", w->panel);
-            if (write_file(dir, name, pv, sizeof(float), 3 * (size_t)nvis)) fprintf(stderr, "bench_tables: cannot write %s\n", name);
+            if (bench_write_binary(dir, name, pv, sizeof(float), 3 * (size_t)nvis)) fprintf(stderr, "bench_tables: cannot write %s\n", name);
             free(pv);
         }
         img[r] = xmalloc(sizeof(float) * nimg);

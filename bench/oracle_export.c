@@ -24,16 +24,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int write_bin(const char *dir, const char *name, const void *a, size_t size, size_t n)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    FILE *f = fopen(path, "wb");
-    if (!f) return -1;
-    const int ok = fwrite(a, size, n, f) == n;
-    return fclose(f) == 0 && ok ? 0 : -1;
-}
-
 static void json_vec(FILE *f, const double *v, int n)
 {
     fputc('[', f);
@@ -135,20 +125,20 @@ int main(int argc, char **argv)
         st = prt_render(&p, &m, NULL, 0, img, &t);
         secs[i] = t.prepare + t.lighting + t.shade + t.resolve;
         snprintf(name, sizeof name, "prt_%d.bin", lmaxes[i]);
-        st = st || write_bin(dir, name, img, sizeof(float), 3 * npix);
+        st = st || bench_write_binary(dir, name, img, sizeof(float), 3 * npix);
         snprintf(name, sizeof name, "vertex_%d.bin", lmaxes[i]);
-        st = st || write_bin(dir, name, p.vrad, sizeof(float), 3 * (size_t)g->nv);
+        st = st || bench_write_binary(dir, name, p.vrad, sizeof(float), 3 * (size_t)g->nv);
     }
     if (!st) {
         const float *colors[3] = {vrad, p.emit_rgb[0], p.emit_rgb[1]};
         lambert_scene(&s, vrad);
-        st = write_bin(dir, "lambert_vertices.bin", vrad, sizeof(float), 3 * (size_t)g->nv);
+        st = bench_write_binary(dir, "lambert_vertices.bin", vrad, sizeof(float), 3 * (size_t)g->nv);
         raster_resolve(&p.fb, p.rm, colors, img, p.nthreads);
-        st = st || write_bin(dir, "lambert_vertex.bin", img, sizeof(float), 3 * npix);
+        st = st || bench_write_binary(dir, "lambert_vertex.bin", img, sizeof(float), 3 * npix);
         lambert_pixels(&p, img);
-        st = st || write_bin(dir, "lambert_pixel.bin", img, sizeof(float), 3 * npix);
+        st = st || bench_write_binary(dir, "lambert_pixel.bin", img, sizeof(float), 3 * npix);
         for (size_t q = 0; q < npix; ++q) ptri[q] = p.fb.mesh[q] == 0 ? p.fb.tri[q] : -1;
-        st = st || write_bin(dir, "pixel_tri.bin", ptri, sizeof(int), npix);
+        st = st || bench_write_binary(dir, "pixel_tri.bin", ptri, sizeof(int), npix);
         for (int t = 0; t < g->nt; ++t) memcpy(alb + 3 * t, s.mats[g->mat[g->tri[3 * t]]].albedo, sizeof(double) * 3);
         char path[1024];
         snprintf(path, sizeof path, "%s/mesh.bin", dir);

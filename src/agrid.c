@@ -626,11 +626,9 @@ int shl_agrid_create(const shl_ctx *ctx, const double lo[3], const double hi[3],
     g->criterion = criterion;
     g->max_nodes = max_nodes;
     g->max_levels = levels;
-    for (int a = 0; a < 3; ++a) {
-        g->res[a] = res[a];
-        g->lo[a] = lo[a];
-        g->hi[a] = hi[a];
-    }
+    memcpy(g->res, res, sizeof g->res);
+    memcpy(g->lo, lo, sizeof g->lo);
+    memcpy(g->hi, hi, sizeof g->hi);
     if (build_level0(g, g->lev)) {
         level_free(g->lev);
         shl__free(g);

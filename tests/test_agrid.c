@@ -216,6 +216,19 @@ SHL_TEST(agrid_threads_and_budget)
     shl_ctx_destroy(ctx);
 }
 
+/* np random points in [-1, 1]^3 (rng seed) and the set's exact values there
+ * (shl_lights_eval_batch, double); returns the largest norm of a value. */
+static double reference_points(const shl_ctx *ctx, const shl_lights *l, int np, unsigned seed, double *pts, double *ref)
+{
+    rng_t r = {seed};
+    for (int i = 0; i < 3 * np; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
+    CHECK(shl_lights_eval_batch(ctx, l, np, pts, ref, NULL) == SHL_OK);
+    double norm = 0.0;
+    const double zero[NV] = {0};
+    for (int p = 0; p < np; ++p) norm = fmax(norm, err_norm(ref + (size_t)p * NV, zero));
+    return norm;
+}
+
 /* Accuracy where the budget allows the tolerance (every cell's estimate <= tol,
  * stats.unresolved == 0), at NP random points independent of the estimate's samples,
  * against shl_lights_eval in double.  Acceptance, from the estimate's behaviour:
@@ -239,13 +252,8 @@ SHL_TEST(agrid_smooth_within_tolerance)
     shl_lights *l = outside_lights();
     const int r4[3] = {4, 4, 4};
     enum { NP = 2000 };
-    rng_t r = {3};
     double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    for (int i = 0; i < 3 * NP; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
-    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
-    double lmax_norm = 0.0;
-    const double zero[NV] = {0};
-    for (int p = 0; p < NP; ++p) lmax_norm = fmax(lmax_norm, err_norm(ref + (size_t)p * NV, zero));
+    const double lmax_norm = reference_points(ctx, l, NP, 3, pts, ref);
     const double tols[2] = {1e-2, 1e-3};
     for (int t = 0; t < 2; ++t) {
         const double tol = tols[t] * lmax_norm;
@@ -401,13 +409,8 @@ SHL_TEST(agrid_mean_criterion_light_inside)
     shl_lights *l = inside_light();
     const int r4[3] = {4, 4, 4};
     enum { NP = 3000 };
-    rng_t r = {13};
     double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    for (int i = 0; i < 3 * NP; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
-    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
-    double lmax_norm = 0.0;
-    const double zero[NV] = {0};
-    for (int p = 0; p < NP; ++p) lmax_norm = fmax(lmax_norm, err_norm(ref + (size_t)p * NV, zero));
+    const double lmax_norm = reference_points(ctx, l, NP, 13, pts, ref);
     const double tol = 1e-3 * lmax_norm;
     shl_agrid *g;
     shl_agrid_stats st;

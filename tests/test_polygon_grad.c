@@ -47,6 +47,23 @@ static void grad_case(const char *what, int lmax, const double x[3], const doubl
     shl_ctx_destroy(ctx);
 }
 
+/* Case it of the random sweeps: a triangle, quad or concave hexagon v (returns n)
+ * of size 0.3..2 and a point x 0.5..4 away, off the polygon's plane. */
+static int random_case(rng_t *r, int it, double v[18], double x[3])
+{
+    double center[3], nrm[3], off[3];
+    const int n = it % 3 == 0 ? 3 : it % 3 == 1 ? 4 : 6;
+    for (int k = 0; k < 3; ++k) center[k] = rng_range(r, -1, 1);
+    rng_unit_vector(r, nrm);
+    random_polygon(r, n, n == 6, center, nrm, rng_range(r, 0.3, 2.0), v);
+    rng_unit_vector(r, off);
+    if (fabs(off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]) < 0.05)
+        for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
+    const double dist = rng_range(r, 0.5, 4.0);
+    for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+    return n;
+}
+
 SHL_TEST(polygon_grad_vs_reference_random)
 {
     shl_ctx *ctx;
@@ -54,16 +71,8 @@ SHL_TEST(polygon_grad_vs_reference_random)
     rng_t r = {21};
     double worst = 0.0;
     for (int it = 0; it < 30; ++it) {
-        double center[3], nrm[3], off[3], v[18], x[3];
-        const int n = it % 3 == 0 ? 3 : it % 3 == 1 ? 4 : 6;
-        for (int k = 0; k < 3; ++k) center[k] = rng_range(&r, -1, 1);
-        rng_unit_vector(&r, nrm);
-        random_polygon(&r, n, n == 6, center, nrm, rng_range(&r, 0.3, 2.0), v);
-        rng_unit_vector(&r, off);
-        if (fabs(off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]) < 0.05)
-            for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
-        const double dist = rng_range(&r, 0.5, 4.0);
-        for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+        double v[18], x[3];
+        const int n = random_case(&r, it, v, x);
         const double e = grad_error(ctx, x, v, n, NULL);
         worst = fmax(worst, e);
         if (!(e <= 1e-8)) harness_fail(__FILE__, __LINE__, "case %d: %.3g, x = (%a, %a, %a)", it, e, x[0], x[1], x[2]);
@@ -83,16 +92,8 @@ SHL_TEST(polygon_grad_every_isa)
         rng_t r = {21};
         double worst = 0.0;
         for (int it = 0; it < 12; ++it) {
-            double center[3], nrm[3], off[3], v[18], x[3];
-            const int n = it % 3 == 0 ? 3 : it % 3 == 1 ? 4 : 6;
-            for (int k = 0; k < 3; ++k) center[k] = rng_range(&r, -1, 1);
-            rng_unit_vector(&r, nrm);
-            random_polygon(&r, n, n == 6, center, nrm, rng_range(&r, 0.3, 2.0), v);
-            rng_unit_vector(&r, off);
-            if (fabs(off[0] * nrm[0] + off[1] * nrm[1] + off[2] * nrm[2]) < 0.05)
-                for (int k = 0; k < 3; ++k) off[k] += 0.1 * nrm[k];
-            const double dist = rng_range(&r, 0.5, 4.0);
-            for (int k = 0; k < 3; ++k) x[k] = center[k] + dist * off[k];
+            double v[18], x[3];
+            const int n = random_case(&r, it, v, x);
             const double e = grad_error(ctx, x, v, n, NULL);
             worst = fmax(worst, e);
             if (!(e <= 1e-8)) harness_fail(__FILE__, __LINE__, "%s case %d: %.3g", isas[i], it, e);

@@ -194,3 +194,13 @@ void bench_loadavg(char *buf, size_t len)
     if (f) fclose(f);
     buf[strcspn(buf, "\n")] = '\0';
 }
+
+int bench_write_binary(const char *dir, const char *name, const void *a, size_t size, size_t n)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f) return -1;
+    const int ok = fwrite(a, size, n, f) == n;
+    return fclose(f) == 0 && ok ? 0 : -1;
+}

@@ -70,6 +70,9 @@ int bench_mkdirs(const char *dir);
  * "<name>: cannot write <path>: <reason>" to stderr and returns NULL. */
 FILE *bench_create(const char *path, const char *mode);
 
+/* Writes n items of size bytes from a to dir/name (binary); 0 on success, -1 otherwise. */
+int bench_write_binary(const char *dir, const char *name, const void *a, size_t size, size_t n);
+
 /* The first line of /proc/loadavg ("unknown" where it cannot be read). */
 void bench_loadavg(char *buf, size_t len);
 
