@@ -1222,16 +1222,7 @@ static int hvl_t2_export(const char *dir, const prt *p, const int *idx, long n)
         memcpy(pts + 9 * i + 3, g->nrm + 3 * (size_t)idx[i], sizeof(double) * 3);
         memcpy(pts + 9 * i + 6, s->mats[g->mat[idx[i]]].albedo, sizeof(double) * 3);
     }
-    snprintf(path, sizeof path, "%s/mesh.bin", dir);
-    f = fopen(path, "wb");
-    st = st || !f;
-    if (f) {
-        st = st || fwrite(g->pos, sizeof(double), 3 * (size_t)g->nv, f) != 3 * (size_t)g->nv;
-        st = st || fwrite(g->nrm, sizeof(double), 3 * (size_t)g->nv, f) != 3 * (size_t)g->nv;
-        st = st || fwrite(alb, sizeof(double), 3 * (size_t)g->nt, f) != 3 * (size_t)g->nt;
-        st = st || fwrite(g->tri, sizeof(int), 3 * (size_t)g->nt, f) != 3 * (size_t)g->nt;
-        st = fclose(f) || st;
-    }
+    st = mesh_write_oracle(g, alb, dir, "mesh.bin") || st;
     st = st || bench_write_binary(dir, "points.bin", pts, sizeof(double), 9 * (size_t)n);
     free(alb);
     free(pts);

@@ -140,17 +140,7 @@ int main(int argc, char **argv)
         for (size_t q = 0; q < npix; ++q) ptri[q] = p.fb.mesh[q] == 0 ? p.fb.tri[q] : -1;
         st = st || bench_write_binary(dir, "pixel_tri.bin", ptri, sizeof(int), npix);
         for (int t = 0; t < g->nt; ++t) memcpy(alb + 3 * t, s.mats[g->mat[g->tri[3 * t]]].albedo, sizeof(double) * 3);
-        char path[1024];
-        snprintf(path, sizeof path, "%s/mesh.bin", dir);
-        FILE *f = fopen(path, "wb");
-        st = st || !f;
-        if (f) {
-            st = st || fwrite(g->pos, sizeof(double), 3 * (size_t)g->nv, f) != 3 * (size_t)g->nv;
-            st = st || fwrite(g->nrm, sizeof(double), 3 * (size_t)g->nv, f) != 3 * (size_t)g->nv;
-            st = st || fwrite(alb, sizeof(double), 3 * (size_t)g->nt, f) != 3 * (size_t)g->nt;
-            st = st || fwrite(g->tri, sizeof(int), 3 * (size_t)g->nt, f) != 3 * (size_t)g->nt;
-            st = fclose(f) || st;
-        }
+        st = mesh_write_oracle(g, alb, dir, "mesh.bin") || st;
     }
     if (!st) {
         char path[1024];

@@ -1,5 +1,6 @@
 #include "mesh.h"
 #include "vec3.h"
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -417,4 +418,19 @@ uint64_t mesh_hash(const mesh *m)
     h = fnv(h, m->pos, sizeof(double) * 3 * (size_t)m->nv);
     h = fnv(h, m->nrm, sizeof(double) * 3 * (size_t)m->nv);
     return fnv(h, m->tri, sizeof(int) * 3 * (size_t)m->nt);
+}
+
+int mesh_write_oracle(const mesh *m, const double *alb, const char *dir, const char *name)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f) return -1;
+    const size_t nv3 = 3 * (size_t)m->nv, nt3 = 3 * (size_t)m->nt;
+    int st = fwrite(m->pos, sizeof(double), nv3, f) != nv3;
+    st = st || fwrite(m->nrm, sizeof(double), nv3, f) != nv3;
+    st = st || fwrite(alb, sizeof(double), nt3, f) != nt3;
+    st = st || fwrite(m->tri, sizeof(int), nt3, f) != nt3;
+    st = fclose(f) || st;
+    return st ? -1 : 0;
 }

@@ -36,6 +36,9 @@ void mesh_compute_normals(mesh *m);
  * they fit, then longest-edge bisection (conforming, +2 triangles per interior edge)
  * for the remainder.  Midpoints interpolate positions and normals linearly.  0 or -1. */
 int mesh_subdivide_to(mesh *m, long target);
+/* dir/name as the oracle reads it (tools/oracle_images.py): positions, normals (3 nv doubles
+ * each), the per-triangle albedo alb (3 nt doubles), triangles (3 nt ints); 0 or -1. */
+int mesh_write_oracle(const mesh *m, const double *alb, const char *dir, const char *name);
 /* Bounding box of the vertices. */
 void mesh_bounds(const mesh *m, double lo[3], double hi[3]);
 /* FNV-1a hash of positions, normals and triangles. */
