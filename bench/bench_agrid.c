@@ -233,11 +233,11 @@ static void run_scene(const char *file, const char *name, int light_in_box, int 
         if (ures[i] == 32) u32 = r;
     }
     /* Both criteria, tolerances relative to the mean |L| of the probe points (tol is absolute in
-     * the API), at a budget of 32^3 nodes; then SHL_AGRID_MAX at smaller budgets and the smallest
-     * tolerance (a light in the box: the estimate stays above any tolerance at its discontinuity,
-     * the budget decides). */
+     * the API), at a budget of 32^3 nodes; then budget-driven runs: SHL_AGRID_MEAN at a tolerance
+     * no run meets (1e-6) and smaller budgets, the refinement going best first by e 8^-l until
+     * the budget refuses a cell. */
     const double rel[] = {1e-1, 3e-2, 1e-2, 3e-3, 2e-3, 1.5e-3, 1e-3, 3e-4};
-    const long budgets[] = {4000, 8000, 16000};
+    const long budgets[] = {3000, 5000, 7000, 9000, 12000, 16000};
     const int cres[] = {4, 8}, nrel = sizeof rel / sizeof rel[0], nb = sizeof budgets / sizeof budgets[0];
     result best_nodes[2], best_time[2];
     for (int m = 0; m < 2; ++m) {
@@ -246,11 +246,11 @@ static void run_scene(const char *file, const char *name, int light_in_box, int 
     }
     for (unsigned c = 0; c < sizeof cres / sizeof cres[0]; ++c)
         for (int t = 0; t < 2 * nrel + nb; ++t) {
-            const int criterion = t < nrel || t >= 2 * nrel ? SHL_AGRID_MAX : SHL_AGRID_MEAN;
-            const double tol = (t < 2 * nrel ? rel[t % nrel] : rel[nrel - 1]) * p.mean_ref;
+            const int criterion = t < nrel ? SHL_AGRID_MAX : SHL_AGRID_MEAN;
+            const double tol = (t < 2 * nrel ? rel[t % nrel] : 1e-6) * p.mean_ref;
             const long budget = t < 2 * nrel ? 32L * 32 * 32 : budgets[t - 2 * nrel];
             result r = adaptive(ctx, l, &p, cres[c], criterion, tol, budget, reps, nthreads);
-            record(name, t >= 2 * nrel ? "max-budg" : criterion == SHL_AGRID_MAX ? "max" : "mean", &r);
+            record(name, t >= 2 * nrel ? "budget" : criterion == SHL_AGRID_MAX ? "max" : "mean", &r);
             for (int m = 0; m < 2; ++m) /* m = 0: at rel. MAE <= 32^3's; 1: at rel. max <= 32^3's */
                 if (m ? r.mx <= u32.mx : r.mae <= u32.mae) {
                     if (best_nodes[m].nodes < 0 || r.nodes < best_nodes[m].nodes) best_nodes[m] = r;

@@ -334,11 +334,15 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * an image's mean absolute error weighs it; near a discontinuity, such as a
  * two-sided light in the box, e stays ~|L| at every level and MAX refines to the
  * budget or the finest level, MEAN to about log_8(|L| / tol) levels).  Cells whose
- * criterion value exceeds tol are refined, largest first, while the total node
- * count stays <= max_nodes (ring included, below); the refinement is breadth-first
- * (level by level), so a tight budget goes to the coarser levels first.  A level
- * from which no refinement can follow (the budget was hit, or the finest level
- * allowed) is not estimated.  Assuming that refinement does not increase e, some
+ * criterion value exceeds tol are refined while the total node count stays
+ * <= max_nodes (ring included, below), best first over all levels: by priority
+ * e 8^-l (the estimate times the cell's volume: its share of the mean error, for
+ * both criteria), in rounds that each refine the cells within a factor 2 of the
+ * largest priority waiting, estimate the new cells and queue those above tol; the
+ * fill stops when none is above tol or the budget refuses the next refinement (so
+ * a tight budget goes where it lowers the mean error most).  Cells on the finest
+ * level allowed are not estimated (no refinement can follow).  Assuming that
+ * refinement does not increase e, some
  * cells keep a verdict instead of being estimated (and are never refined): the ring
  * cells of level l >= 1 (below; each lies in an unrefined level-(l-1) cell, criterion
  * within tol) and, for SHL_AGRID_MEAN, the children of a cell whose criterion was
@@ -374,8 +378,8 @@ typedef struct {
     long long bytes;     /* memory held: node data, cell records, hash tables */
     int levels;          /* levels built, 1 = the coarse grid only */
     long samples;        /* estimate samples of the last fill (2 per cell estimated) */
-    long unresolved;     /* cells estimated > tol and left unrefined; -1: unknown, the last
-                            level was not estimated (budget hit or finest level); 0: every
+    long unresolved;     /* cells estimated > tol and left unrefined (budget hit); -1: unknown,
+                            cells on the finest level allowed were not estimated; 0: every
                             sample of the last fill within tol */
     double max_estimate; /* largest criterion value (e or e 8^-l) of an estimated cell left unrefined
                             (0 before any fill) */

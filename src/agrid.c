@@ -1,8 +1,8 @@
 /* Adaptive multi-level SH grids (include/shlight.h, shl_agrid_*): levels of
- * sparse uniform lattices refined where an a-posteriori estimate (the interpolant
- * against the float light-set batch at two points per cell, for level 0 and the
- * children of refined cells) exceeds the tolerance, blended into a C0
- * interpolant; each level is Wu 2020 Alg. 4 on its cells.  The estimate is one
+ * sparse uniform lattices refined, best first over all levels, where an
+ * a-posteriori estimate (the interpolant against the float light-set batch at two
+ * points per cell, for level 0 and the children of refined cells) exceeds the
+ * tolerance, blended into a C0 interpolant; each level is Wu 2020 Alg. 4 on its cells.  The estimate is one
  * function (estimate_cells) over a list of cells of a level: an a-priori one
  * (e.g. from analytic Hessians) would replace it there. */
 #include "agrid.h"
@@ -170,20 +170,23 @@ static int add_cell(shl__alevel *L, const int c[3])
     return SHL_OK;
 }
 
-/* Every cell's corner nodes (present: added with the cell) and flags (bit j: corner
- * j flagged; all set on level 0). */
-static void resolve_cells(shl__alevel *L, int level0)
+/* The corner nodes of cells from.. (present: added with the cell) and every cell's
+ * flags (bit j: corner j flagged; all set on level 0). */
+static void resolve_cells(shl__alevel *L, size_t from, int level0)
 {
-    for (size_t c = 0; c < L->ncells; ++c) {
+    for (size_t c = from; c < L->ncells; ++c) {
         int ci[3];
         unkey(L->cell_key[c], ci);
-        unsigned char cf = level0 ? 0xFF : 0;
         for (int j = 0; j < 8; ++j) {
             int v[3];
             for (int a = 0; a < 3; ++a) v[a] = ci[a] + ((j >> a) & 1);
             L->cell[c].node[j] = (uint32_t)hfind(&L->nodes, key3(v));
-            if (L->flag[L->cell[c].node[j]]) cf |= (unsigned char)(1u << j);
         }
+    }
+    for (size_t c = 0; c < L->ncells; ++c) {
+        unsigned char cf = level0 ? 0xFF : 0;
+        for (int j = 0; j < 8; ++j)
+            if (L->flag[L->cell[c].node[j]]) cf |= (unsigned char)(1u << j);
         L->cell[c].flags = cf;
     }
 }
@@ -199,7 +202,7 @@ static int build_level0(const shl_agrid *g, shl__alevel *L)
                 if (add_node(L, i, g->node_len)) return SHL_ENOMEM;
                 if (i[0] < L->n[0] && i[1] < L->n[1] && i[2] < L->n[2] && add_cell(L, i)) return SHL_ENOMEM;
             }
-    resolve_cells(L, 1);
+    resolve_cells(L, 0, 1);
     return SHL_OK;
 }
 
@@ -300,30 +303,41 @@ int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double 
 
 enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
 
+/* A cell (index in its level), its estimate or criterion value e and its
+ * refinement priority p = e 8^-l (e times its volume in coarse-cell units). */
+typedef struct {
+    double e, p;
+    uint32_t cell;
+    int level;
+} ranked;
+
 typedef struct {
     const shl_agrid *g;
     const shl_lights *lights;
     shl_ctx ctx;
     shl__alevel *lev;
-    int l;              /* the level worked on */
-    const uint32_t *which; /* estimate_cells: the cells of level l estimated, */
-    size_t nwhich;      /* nwhich of them, */
-    double *est;        /* and their estimates (est[k] for cell which[k]) */
+    size_t from[SHL_AGRID_LEVELS_MAX]; /* eval_nodes: the nodes from[l].. of each level l are new, */
+    long blk[SHL_AGRID_LEVELS_MAX + 1]; /* in blocks blk[l] .. blk[l + 1] - 1 (none crosses a level) */
+    ranked *which;  /* estimate_cells: the cells estimated (any levels), their estimates into .e */
+    size_t nwhich;
     char *ws;
     size_t stride, batch_bytes;
 } fill_job;
 
-/* The nodes of level l, blocks of BLOCK in node order, through the float batch
- * with gradients (Wu 2020 Alg. 1 l. 5-7), straight into the node data. */
+/* The new nodes of every level, blocks of BLOCK consecutive nodes of one level,
+ * through the float batch with gradients (Wu 2020 Alg. 1 l. 5-7), straight into
+ * the node data. */
 static void nodes_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
     const shl_agrid *g = job->g;
-    shl__alevel *L = job->lev + job->l;
     void *buf = job->batch_bytes ? job->ws + job->stride * (size_t)worker : NULL;
     float pts[3 * BLOCK];
     for (long b = begin; b < end; ++b) {
-        const size_t n0 = (size_t)b * BLOCK, left = L->nnodes - n0;
+        int l = 0;
+        while (b >= job->blk[l + 1]) ++l;
+        shl__alevel *L = job->lev + l;
+        const size_t n0 = job->from[l] + (size_t)(b - job->blk[l]) * BLOCK, left = L->nnodes - n0;
         const int m = left < BLOCK ? (int)left : BLOCK;
         for (int j = 0; j < m; ++j) {
             int i[3];
@@ -335,14 +349,14 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     }
 }
 
-/* The estimate of the cells job->which of level l (include/shlight.h): A of levels 0..l
- * against the float batch (values only) at the samples lo + (c + q) h, q = 1/4 and 3/4
- * on every axis, both rounded to float. */
+/* The estimate of the cells job->which (include/shlight.h), BLOCK / SAMPLES cells a
+ * block whatever their levels: A of levels 0..l (l the cell's level) against the
+ * float batch (values only) at the samples lo + (c + q) h_l, q = 1/4 and 3/4 on every
+ * axis, both rounded to float. */
 static void estimate_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
     const shl_agrid *g = job->g;
-    const shl__alevel *L = job->lev + job->l;
     const size_t nv = 3 * (size_t)g->nc;
     char *w = job->ws + job->stride * (size_t)worker;
     float *rgb = (float *)(void *)(w + shl__ws_stride(job->batch_bytes)), pts[3 * BLOCK];
@@ -351,8 +365,10 @@ static void estimate_range(void *arg, int worker, long begin, long end)
         const size_t c0 = (size_t)b * (BLOCK / SAMPLES), left = job->nwhich - c0;
         const int mc = left < BLOCK / SAMPLES ? (int)left : BLOCK / SAMPLES;
         for (int j = 0; j < mc; ++j) {
+            const ranked *r = job->which + c0 + j;
+            const shl__alevel *L = job->lev + r->level;
             int c[3];
-            unkey(L->cell_key[job->which[c0 + j]], c);
+            unkey(L->cell_key[r->cell], c);
             for (int q = 0; q < SAMPLES; ++q)
                 for (int k = 0; k < 3; ++k)
                     pts[3 * (SAMPLES * j + q) + k] = (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
@@ -364,7 +380,7 @@ static void estimate_range(void *arg, int worker, long begin, long end)
             for (int q = 0; q < SAMPLES; ++q) {
                 const int s = SAMPLES * j + q;
                 const double x[3] = {pts[3 * s], pts[3 * s + 1], pts[3 * s + 2]};
-                composite(g, job->lev, job->l + 1, x, a, tmp);
+                composite(g, job->lev, job->which[c0 + j].level + 1, x, a, tmp);
                 for (int col = 0; col < 3; ++col) {
                     double sum = 0.0;
                     for (int k = 0; k < g->nc; ++k) {
@@ -374,13 +390,14 @@ static void estimate_range(void *arg, int worker, long begin, long end)
                     e = fmax(e, sqrt(sum));
                 }
             }
-            job->est[c0 + j] = e;
+            job->which[c0 + j].e = e;
         }
     }
 }
 
 static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size_t extra)
 {
+    if (nblocks == 0) return SHL_OK;
     const int nw = shl__parallel_workers(nblocks, 1, nthreads);
     job->stride = shl__ws_stride(shl__ws_stride(job->batch_bytes) + extra);
     job->ws = NULL;
@@ -391,34 +408,32 @@ static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size
     return st;
 }
 
-static int eval_nodes(fill_job *job, int l, int nthreads)
+/* The nodes of levels 0..nl-1 not yet evaluated, in one parallel pass. */
+static int eval_nodes(fill_job *job, int nl, int nthreads)
 {
-    job->l = l;
-    const long n = (long)((job->lev[l].nnodes + BLOCK - 1) / BLOCK);
-    return run(job, n, nthreads, nodes_range, 0);
+    job->blk[0] = 0;
+    for (int l = 0; l < SHL_AGRID_LEVELS_MAX; ++l)
+        job->blk[l + 1] = job->blk[l] + (l < nl ? (long)((job->lev[l].nnodes - job->from[l] + BLOCK - 1) / BLOCK) : 0);
+    const int st = run(job, job->blk[SHL_AGRID_LEVELS_MAX], nthreads, nodes_range, 0);
+    for (int l = 0; !st && l < nl; ++l) job->from[l] = job->lev[l].nnodes;
+    return st;
 }
 
-/* The estimates est[k] of the cells which[k], k < n, of level l. */
-static int estimate_cells(fill_job *job, int l, const uint32_t *which, size_t nwhich, double *est, int nthreads)
+/* The estimates of the cells which[k].cell of level which[k].level, k < n, into which[k].e. */
+static int estimate_cells(fill_job *job, ranked *which, size_t nwhich, int nthreads)
 {
-    job->l = l;
     job->which = which;
     job->nwhich = nwhich;
-    job->est = est;
     const size_t nv = 3 * (size_t)job->g->nc;
     const long n = (long)((nwhich + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
     return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
 }
 
-typedef struct {
-    double e;
-    uint32_t cell;
-} ranked;
-
 static int by_estimate(const void *pa, const void *pb)
 {
     const ranked *a = pa, *b = pb;
-    if (a->e != b->e) return a->e > b->e ? -1 : 1; /* largest first */
+    if (a->p != b->p) return a->p > b->p ? -1 : 1; /* largest first */
+    if (a->level != b->level) return a->level < b->level ? -1 : 1;
     return (a->cell > b->cell) - (a->cell < b->cell);
 }
 
@@ -482,91 +497,114 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
     st->bytes = (long long)bytes;
 }
 
-/* Levels into lev[] (nl of them), stats of the fill into *st. */
+/* Room for n more entries in the growable array *p (size *cap, used elements used). */
+static int reserve(ranked **p, size_t *cap, size_t used, size_t n)
+{
+    if (used + n <= *cap) return SHL_OK;
+    size_t c = *cap ? 2 * *cap : 256;
+    while (c < used + n) c *= 2;
+    if (regrow((void **)p, used, c, sizeof **p)) return SHL_ENOMEM;
+    *cap = c;
+    return SHL_OK;
+}
+
+/* Levels into lev[] (nl of them), stats of the fill into *st.  Refinement is best
+ * first over all levels (include/shlight.h): the cells whose criterion value exceeds
+ * the tolerance wait in a queue by priority e 8^-l; each round refines, largest
+ * first, those within a factor ROUND of the largest (a round's new nodes then go through
+ * the batch kernels together, in full blocks, and so do the estimates of the new
+ * cells), until the queue is empty or the budget stops a refinement. */
 static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl__alevel *lev, int *nl,
                  shl_agrid_stats *st)
 {
-    fill_job job = {g, lights, {g->lmax, g->nc, g->isa}, lev, 0, NULL, 0, NULL, NULL, 0, 0};
+    static const double ROUND = 0.5;
+    fill_job job;
+    memset(&job, 0, sizeof job);
+    job.g = g;
+    job.lights = lights;
+    job.ctx = (shl_ctx){g->lmax, g->nc, g->isa};
+    job.lev = lev;
     job.batch_bytes = shl__lights_batch_f_bytes(&job.ctx, lights, 1); /* >= the values-only size */
     *nl = 1;
     int status = build_level0(g, lev);
-    if (!status) status = eval_nodes(&job, 0, nthreads);
+    if (!status) status = eval_nodes(&job, 1, nthreads);
     long total = (long)lev[0].nnodes;
-    double *pcrit = NULL; /* criterion value of each refined cell of level l - 1 (others: unset) */
-    for (int l = 0; !status; ++l) {
-        shl__alevel *L = lev + l;
-        if (st->budget_hit || l + 1 >= g->max_levels) { /* no refinement can follow: not estimated */
-            st->unresolved = -1;
-            break;
+    ranked *queue = NULL, *est = NULL, *done = NULL;
+    size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
+    int unknown = g->max_levels < 2; /* cells left that were not estimated (on the finest level) */
+    if (!status && !unknown && !(status = reserve(&est, &ecap, 0, lev[0].ncells)))
+        for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0};
+    while (!status) {
+        /* the new cells' estimates; criterion values above tol join the queue */
+        if ((status = estimate_cells(&job, est, ne, nthreads)) || (status = reserve(&queue, &qcap, nq, ne))) break;
+        st->samples += SAMPLES * (long)ne;
+        for (size_t k = 0; k < ne; ++k) {
+            ranked r = est[k];
+            r.p = ldexp(r.e, -3 * r.level); /* the cell's volume / h_0^3 */
+            if (g->criterion == SHL_AGRID_MEAN) r.e = r.p;
+            if (r.e > g->tol) queue[nq++] = r;
+            else st->max_estimate = fmax(st->max_estimate, r.e);
         }
-        double *est = shl__malloc(L->ncells * sizeof *est), *crit = shl__malloc(L->ncells * sizeof *crit);
-        ranked *flagged = shl__malloc(L->ncells * sizeof *flagged);
-        uint32_t *which = shl__malloc(L->ncells * sizeof *which);
-        if (!est || !crit || !flagged || !which) status = SHL_ENOMEM;
-        size_t nw = 0, nf = 0, done = 0;
-        /* Estimated: level 0's cells and the children of refined cells (all corners
-         * flagged: every child of a level-(l-1) cell has its centre as a corner, flagged
-         * only if it was refined), under the assumption that refining does not increase
-         * the estimate e: a ring cell lies in an unrefined level-(l-1) cell (criterion
-         * within tol) and inherits its verdict (a ring cell's A is a convex combination
-         * of the two levels); for SHL_AGRID_MEAN a child's criterion is then at most its
-         * parent's / 8 (the volume), so the children of a parent with criterion
-         * <= 8 tol are not estimated either (one-level look-ahead). */
-        for (size_t c = 0; !status && c < L->ncells; ++c) {
-            if (L->cell[c].flags != 0xFF) continue;
-            if (l > 0 && g->criterion == SHL_AGRID_MEAN) {
-                int ci[3];
-                unkey(L->cell_key[c], ci);
-                for (int a = 0; a < 3; ++a) ci[a] >>= 1;
-                if (pcrit[hfind(&lev[l - 1].cells, key3(ci))] <= 8.0 * g->tol) continue;
+        ne = 0;
+        if (nq == 0 || st->budget_hit) break;
+        qsort(queue, nq, sizeof *queue, by_estimate);
+        /* this round: refine the queue's head */
+        const double thr = ROUND * queue[0].p;
+        size_t cells0[SHL_AGRID_LEVELS_MAX], k = 0;
+        for (int l = 0; l < SHL_AGRID_LEVELS_MAX; ++l) cells0[l] = lev[l].ncells;
+        nd = 0;
+        for (; k < nq && queue[k].p >= thr; ++k) {
+            const int l = queue[k].level;
+            if (l + 1 >= *nl) {
+                level_init(g, l + 1, lev + l + 1);
+                *nl = l + 2;
             }
-            which[nw++] = (uint32_t)c;
-        }
-        if (!status) status = estimate_cells(&job, l, which, nw, est, nthreads);
-        if (!status) {
-            st->samples += SAMPLES * (long)nw;
-            const double scale = g->criterion == SHL_AGRID_MEAN ? ldexp(1.0, -3 * l) : 1.0; /* the cell's volume / h_0^3 */
-            for (size_t k = 0; k < nw; ++k)
-                if (est[k] * scale > g->tol) flagged[nf++] = (ranked){est[k] * scale, which[k]};
-                else st->max_estimate = fmax(st->max_estimate, est[k] * scale);
-            qsort(flagged, nf, sizeof *flagged, by_estimate);
-        }
-        if (!status && nf > 0) {
-            shl__alevel *F = lev + l + 1;
-            level_init(g, l + 1, F);
-            *nl = l + 2;
-            for (; done < nf && !status; ++done) {
-                const int r = refine(g, L, F, flagged[done].cell, &total);
-                if (r == 1) st->budget_hit = 1;
-                if (r) {
-                    status = r < 0 ? r : SHL_OK;
-                    break;
-                }
-                crit[flagged[done].cell] = flagged[done].e;
+            const int r = refine(g, lev + l, lev + l + 1, queue[k].cell, &total);
+            if (r == 1) st->budget_hit = 1;
+            if (r || (status = reserve(&done, &dcap, nd, 1))) {
+                status = r < 0 ? r : status;
+                break;
             }
-            if (!status && F->ncells == 0) {
-                level_free(F);
-                *nl = l + 1;
+            done[nd++] = queue[k];
+        }
+        memmove(queue, queue + k, (nq - k) * sizeof *queue); /* the refined ones leave it */
+        nq -= k;
+        if (lev[*nl - 1].ncells == 0) { /* a level begun, but the budget refused its first cell */
+            level_free(lev + *nl - 1);
+            --*nl;
+        }
+        if (status) break;
+        for (int l = 1; l < *nl; ++l) resolve_cells(lev + l, cells0[l], 0);
+        if ((status = eval_nodes(&job, *nl, nthreads))) break;
+        /* the refined cells' children are estimated, unless they are on the finest level
+         * allowed (no refinement can follow) or, for SHL_AGRID_MEAN, their parent's
+         * criterion was <= 8 tol (a child's is then <= tol: one eighth the volume) */
+        for (size_t d = 0; d < nd && !status; ++d) {
+            const int lc = done[d].level + 1;
+            if (lc + 1 >= g->max_levels) {
+                unknown = 1;
+                continue;
+            }
+            if (g->criterion == SHL_AGRID_MEAN && done[d].e <= 8.0 * g->tol) continue;
+            if ((status = reserve(&est, &ecap, ne, 8))) break;
+            int ci[3];
+            unkey(lev[lc - 1].cell_key[done[d].cell], ci);
+            for (int j = 0; j < 8; ++j) {
+                int cc[3];
+                for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
+                est[ne++] = (ranked){0.0, 0.0, (uint32_t)hfind(&lev[lc].cells, key3(cc)), lc};
             }
         }
-        for (size_t k = done; k < nf && !status; ++k) { /* left unrefined */
-            ++st->unresolved;
-            st->max_estimate = fmax(st->max_estimate, flagged[k].e);
-        }
-        shl__free(est);
-        shl__free(flagged);
-        shl__free(which);
-        shl__free(pcrit);
-        pcrit = crit;
-        if (status || *nl == l + 1) break;
-        resolve_cells(lev + l + 1, 0);
-        status = eval_nodes(&job, l + 1, nthreads);
     }
-    shl__free(pcrit);
     if (!status) {
+        for (size_t k = 0; k < nq; ++k) st->max_estimate = fmax(st->max_estimate, queue[k].e);
+        st->unresolved = unknown ? -1 : (long)nq;
         for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
         fill_stats(g, lev, *nl, st);
     }
+    shl__free(queue);
+    shl__free(est);
+    shl__free(done);
     return status;
 }
 

@@ -337,7 +337,7 @@ def panel_figure(name, tables, out):
 def agrid(rows, out):
     """bench/bench_agrid.c: rel. MAE vs nodes and vs fill time, uniform and each adaptive kind, per scene."""
     kinds = OrderedDict([("uniform", ("o", "tab:blue")), ("max", ("s", "tab:red")), ("mean", ("^", "tab:green")),
-                         ("max-budg", ("v", "tab:orange"))])
+                         ("budget", ("v", "tab:orange"))])
     for scene in OrderedDict((r["scene"], 1) for r in rows):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
         for ax, xkey, xlabel in ((axes[0], "nodes", "nodes"), (axes[1], "fill_s", "fill time (s)")):
