@@ -13,11 +13,21 @@
  * the least fill time among those at an error <= uniform 32^3's (rel. MAE; on wu-monkey
  * also the largest error: on wu-fig12 that is the jump across the light, unresolved by any
  * grid); all from this run.
- * Usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey] [-d DIR]; writes DIR/bench_agrid.csv
+ * Image error (the issue's measure): wu-fig12 and wu-monkey rendered as bench_tables renders them (their
+ * meshes from --meshes DIR, else $SHLIGHT_MESHES, else ../shared/meshes; skipped with a note when
+ * absent), per-vertex analytic float SIMD at the visible vertices as the reference, uniform grids
+ * and adaptive grids (coarse 4^3, SHL_AGRID_MEAN; tolerances and budgets) lighting every vertex;
+ * rel. MAE of the image (bench/common/image.h) against the reference; fill times from fills of the
+ * same grids outside the frame.  Writes DIR/bench_agrid_image.csv:
+ * scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae.
+ * Usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR]; writes DIR/bench_agrid.csv
  * (default build/bench): scene,kind,res,tol,nodes,samples,levels,fill_s,cpu_s,rel_mae,rel_max,bytes
  * (fill_s wall, cpu_s process CPU time of the fill, best of the repetitions).
  * samples: the estimate's light-set evaluations without gradients (stats.samples), the fill's
  * cost beyond its nodes; with the node count a cost proxy that load does not disturb. */
+#include "image.h"
+#include "meshes.h"
+#include "prt.h"
 #include "scene.h"
 #include "shlight.h"
 #include "util.h"
@@ -280,10 +290,147 @@ static void run_scene(const char *file, const char *name, int light_in_box, int 
     shl_ctx_destroy(ctx);
 }
 
+/* One frame of the rendered scene with lighting method m: its image error; then the method's
+ * grid alone, filled reps times outside the frame: wall and CPU time of the fill (best of reps)
+ * and the node count. */
+static void image_row(FILE *f, prt *pr, const lighting_method *m, const float *ref, double exposure, float *img, int reps,
+                      const char *kind, double tol_rel, double *mae, double *fill, long *nodes)
+{
+    prt_times t;
+    if (prt_render(pr, m, NULL, 0, img, &t)) {
+        fprintf(stderr, "bench_agrid: render failed\n");
+        exit(1);
+    }
+    const image_error e = image_compare(pr->s->width, pr->s->height, img, ref, pr->mask, exposure);
+    *mae = e.mae / e.mean_ref;
+    shl_ctx *ctx;
+    shl_lights *l = scene_light_set(pr->s);
+    const int r3[3] = {m->grid_res, m->grid_res, m->grid_res};
+    must(shl_ctx_create(m->lmax, &ctx), "ctx");
+    shl_agrid *ag = NULL;
+    shl_grid *ug = NULL;
+    if (m->kind == LM_AGRID)
+        must(shl_agrid_create(ctx, pr->lo, pr->hi, r3, m->agrid_criterion, m->agrid_tol, m->agrid_budget, &ag), "agrid");
+    else
+        must(shl_grid_create(ctx, pr->lo, pr->hi, r3, SHL_GRID_FLOAT, &ug), "grid");
+    double cpu = INFINITY;
+    *fill = INFINITY;
+    for (int k = 0; k < reps; ++k) {
+        const double t0 = bench_now(), c0 = cpu_now();
+        must(ag ? shl_agrid_fill(ag, l, pr->nthreads) : shl_grid_fill(ug, l, pr->nthreads), "fill");
+        *fill = fmin(*fill, bench_now() - t0);
+        cpu = fmin(cpu, cpu_now() - c0);
+    }
+    shl_agrid_stats st = {0};
+    if (ag) must(shl_agrid_get_stats(ag, &st), "stats");
+    *nodes = ag ? st.nodes : (long)r3[0] * r3[1] * r3[2];
+    shl_agrid_destroy(ag);
+    shl_grid_destroy(ug);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+    printf("  %-8s res %3d  tol %9.3g  budget %7ld  nodes %7ld  samples %7ld  fill %8.2f ms  cpu %8.2f ms  image rel MAE "
+           "%.3e\n",
+           kind, m->grid_res, tol_rel, ag ? m->agrid_budget : 0L, *nodes, st.samples, *fill * 1e3, cpu * 1e3, *mae);
+    if (f)
+        fprintf(f, "%s,%s,%d,%.4e,%ld,%ld,%ld,%.6f,%.6f,%.5e\n", pr->s->name, kind, m->grid_res, tol_rel,
+                m->kind == LM_AGRID ? m->agrid_budget : 0L, *nodes, st.samples, *fill, cpu, *mae);
+}
+
+/* The image error of uniform and adaptive grids on a rendered scene (see the top of the file). */
+static void run_image(FILE *f, const char *file, const char *meshes, int quick, int nthreads)
+{
+    printf("\n== %s rendered (image error against the per-vertex reference), lmax %d, %d threads ==\n", file, LMAX,
+           nthreads);
+    char err[1024], path[1024];
+    if (meshes_verify(meshes, err, sizeof err)) {
+        printf("  skipped: the scene's mesh is not in %s (--meshes DIR):\n%s\n", meshes, err);
+        return;
+    }
+    scene_mesh_dir = meshes;
+    scene s;
+    snprintf(path, sizeof path, "bench/scenes/%s", file);
+    if (scene_load(path, &s, err, sizeof err)) {
+        printf("  skipped: %s\n", err);
+        return;
+    }
+    prt pr;
+    if (prt_init(&pr, &s, nthreads, NULL, NULL)) {
+        fprintf(stderr, "bench_agrid: precomputation failed\n");
+        exit(1);
+    }
+    const size_t len = 3 * (size_t)s.width * (size_t)s.height;
+    float *ref = xmalloc(sizeof(float) * len), *img = xmalloc(sizeof(float) * len);
+    int *idx = xmalloc(sizeof(int) * (size_t)s.geom.nv);
+    const long nvis = prt_visible_vertices(&pr, idx);
+    lighting_method m;
+    memset(&m, 0, sizeof m);
+    m.kind = LM_ANALYTIC_F;
+    m.lmax = LMAX;
+    prt_times t;
+    if (prt_render(&pr, &m, idx, nvis, ref, &t)) exit(1);
+    const double exposure = prt_exposure(&pr, ref);
+    const int reps = quick ? 1 : 3, ures[] = {8, 12, 16, 24, 32};
+    double mae, fill, u32_mae = 0, u32_fill = INFINITY;
+    long nodes;
+    m.kind = LM_GRID;
+    m.interp = SHL_INTERP_HERMITE;
+    m.grid_storage = SHL_GRID_FLOAT;
+    for (unsigned i = 0; i < sizeof ures / sizeof ures[0]; ++i) {
+        m.grid_res = ures[i];
+        image_row(f, &pr, &m, ref, exposure, img, reps, "uniform", 0.0, &mae, &fill, &nodes);
+        if (ures[i] == 32) {
+            u32_mae = mae;
+            u32_fill = fill;
+        }
+    }
+    /* tolerances relative to the mean |L| over the box (the same probe as above), at a budget of
+     * 32^3; then budgets at a tolerance no run meets */
+    shl_ctx *ctx;
+    must(shl_ctx_create(LMAX, &ctx), "ctx");
+    shl_lights *l = scene_light_set(&s);
+    probe p;
+    probe_init(&p, ctx, l, nthreads);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+    const double rel[] = {3e-2, 1e-2, 5e-3, 3e-3, 2e-3, 1e-3};
+    const long budgets[] = {3000, 5000, 7000, 9000, 12000, 16000};
+    const int nrel = sizeof rel / sizeof rel[0], nb = sizeof budgets / sizeof budgets[0];
+    m.kind = LM_AGRID;
+    m.grid_res = 4;
+    m.agrid_criterion = SHL_AGRID_MEAN;
+    long best_nodes = -1;
+    double best_fill = INFINITY;
+    for (int k = 0; k < nrel + nb; ++k) {
+        m.agrid_tol = (k < nrel ? rel[k] : 1e-6) * p.mean_ref;
+        m.agrid_budget = k < nrel ? 32L * 32 * 32 : budgets[k - nrel];
+        image_row(f, &pr, &m, ref, exposure, img, reps, k < nrel ? "mean" : "budget", k < nrel ? rel[k] : 1e-6, &mae,
+                  &fill, &nodes);
+        if (mae <= u32_mae) {
+            if (best_nodes < 0 || nodes < best_nodes) best_nodes = nodes;
+            best_fill = fmin(best_fill, fill);
+        }
+    }
+    if (best_nodes < 0)
+        printf("  image rel. MAE <= uniform 32^3's (%.3e): no adaptive run\n", u32_mae);
+    else
+        printf("  image rel. MAE <= uniform 32^3's (%.3e): fewest nodes %ld (%.1fx fewer than 32768), least fill time "
+               "%.1f ms (%.1fx less than 32^3's %.1f ms)\n",
+               u32_mae, best_nodes, 32768.0 / best_nodes, best_fill * 1e3, u32_fill / best_fill, u32_fill * 1e3);
+    free(p.pts);
+    free(p.ref);
+    free(p.out);
+    free(ref);
+    free(img);
+    free(idx);
+    prt_free(&pr);
+    scene_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     const char *dir = "build/bench";
-    const char *only = NULL;
+    const char *only = NULL, *meshes = getenv(MESHES_ENV);
+    if (!meshes || !meshes[0]) meshes = MESHES_DEFAULT_DIR;
     int quick = 0, nthreads = 2;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick"))
@@ -292,22 +439,35 @@ int main(int argc, char **argv)
             nthreads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = argv[++i];
+        else if (!strcmp(argv[i], "--meshes") && i + 1 < argc)
+            meshes = argv[++i];
         else if (!strcmp(argv[i], "-d") && i + 1 < argc)
             dir = argv[++i];
         else {
-            fprintf(stderr, "usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey] [-d DIR]\n");
+            fprintf(stderr, "usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR]\n");
             return 2;
         }
     }
     char path[1024];
     snprintf(path, sizeof path, "%s/bench_agrid.csv", dir);
-    csv = fopen(path, "w");
+    csv = only && !strcmp(only, "image") ? NULL : fopen(path, "w");
     if (csv) fprintf(csv, "scene,kind,res,tol,nodes,samples,levels,fill_s,cpu_s,rel_mae,rel_max,bytes\n");
     if (!only || !strcmp(only, "wu-fig12")) run_scene("wu-fig12.scene", "wu-fig12", 1, quick, nthreads);
     if (!only || !strcmp(only, "wu-monkey")) run_scene("wu-monkey.scene", "wu-monkey", 0, quick, nthreads);
     if (csv) {
         fclose(csv);
         printf("\nCSV: %s\n", path);
+    }
+    if (!only || !strcmp(only, "image")) {
+        snprintf(path, sizeof path, "%s/bench_agrid_image.csv", dir);
+        FILE *f = fopen(path, "w");
+        if (f) fprintf(f, "scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae\n");
+        run_image(f, "wu-fig12.scene", meshes, quick, nthreads);
+        run_image(f, "wu-monkey.scene", meshes, quick, nthreads);
+        if (f) {
+            fclose(f);
+            printf("\nCSV: %s\n", path);
+        }
     }
     return 0;
 }

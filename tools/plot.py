@@ -15,6 +15,7 @@ Writes SVG and PNG files:
   hvl2022_table1            HVL gathering time vs HVL count, per band count
   agrid_<scene>             adaptive vs uniform grids: error vs nodes and vs fill time
                             (bench_agrid.csv: build/bench/bench_agrid -d <tables dir>)
+  agrid_image               the same on the rendered wu-fig12 image (bench_agrid_image.csv, same run)
   wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
   annen2004_fig8            error of one extrapolated sample vs distance
   wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12, hvl2022_table2
@@ -66,6 +67,7 @@ SWEEP_STYLE = {  # family -> colour, marker
     "grid 16^3 Hermite": ("tab:red", "v"),
     "grid 32^3 Hermite": ("tab:brown", "D"),
     "grid 16^3 trilinear": ("tab:pink", "<"),
+    "adaptive grid, 4096 nodes": ("tab:purple", "P"),
 }
 MC_COLOURS = ("tab:olive", "tab:green", "darkgreen", "black")
 
@@ -95,7 +97,7 @@ def accuracy_vs_time(rows, out):
                 ax.annotate(p["lmax"], (xi, yi), fontsize=6, color=colour, xytext=(3, 2), textcoords="offset points")
             if method == "per-vertex float":
                 floors = {p["lmax"]: yi for p, yi in zip(pts, y)}
-            if method.startswith("grid") and "Hermite" in method:
+            if (method.startswith("grid") and "Hermite" in method) or method.startswith("adaptive grid"):
                 xs = [float(p["frame_ms"]) - float(p["fill_ms"]) for p in pts]
                 ax.plot(xs, y, marker=marker, markersize=4.5, color=colour, linewidth=0.8, linestyle=":", alpha=0.6,
                         markerfacecolor="none", label=f"{method}, static lights (no fill)")
@@ -356,6 +358,29 @@ def agrid(rows, out):
         save(fig, out, f"agrid_{scene}")
 
 
+def agrid_image(rows, out):
+    """bench/bench_agrid.c, rendered wu-fig12: image rel. MAE vs nodes and vs fill time, uniform grids
+    and adaptive ones (tolerance- and budget-driven), the uniform 32^3 error as a dashed line."""
+    kinds = OrderedDict([("uniform", ("o", "tab:blue")), ("mean", ("^", "tab:green")), ("budget", ("v", "tab:orange"))])
+    u32 = [float(r["rel_mae"]) for r in rows if r["kind"] == "uniform" and r["res"] == "32"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, xkey, xlabel, scale in ((axes[0], "nodes", "nodes", 1.0), (axes[1], "fill_s", "fill time (ms)", 1e3)):
+        for kind, (marker, color) in kinds.items():
+            pts = sorted((float(r[xkey]) * scale, float(r["rel_mae"])) for r in rows if r["kind"] == kind)
+            if pts:
+                ax.plot(*zip(*pts), marker=marker, color=color, linestyle="-" if kind != "mean" else ":", label=kind)
+        if u32:
+            ax.axhline(u32[0], color="tab:blue", linestyle="--", linewidth=0.8, label="uniform 32^3")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("image MAE / mean radiance")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("wu-fig12 rendered: adaptive (coarse 4^3, SHL_AGRID_MEAN) vs uniform grids (lmax 8, Hermite)")
+    save(fig, out, "agrid_image")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tables", default="build/bench-tables/tables", help="directory of the CSV files")
@@ -363,7 +388,8 @@ def main():
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     for name, fn in (("accuracy_vs_time.csv", accuracy_vs_time), ("wu2020_fig8.csv", wu_fig8),
-                     ("wu2020_fig9.csv", wu_fig9), ("hvl2022_table1.csv", hvl_table1), ("bench_agrid.csv", agrid)):
+                     ("wu2020_fig9.csv", wu_fig9), ("hvl2022_table1.csv", hvl_table1), ("bench_agrid.csv", agrid),
+                     ("bench_agrid_image.csv", agrid_image)):
         rows = read_csv(os.path.join(args.tables, name))
         if rows:
             fn(rows, args.out)

@@ -15,6 +15,7 @@ struct lighting {
     shl_ctx *ctx;
     shl_lights *set;
     shl_grid *grid;
+    shl_agrid *agrid;
     double *sample;               /* SINGLE / TAYLOR1: per sample 3 nc values, then 9 nc gradients */
     int nsamples;
     double (*normal)[3];          /* per polygon: unit normal (one-sided: the emitting side) */
@@ -31,6 +32,10 @@ const char *lighting_name(const lighting_method *m, char *buf, size_t len)
     case LM_GRID:
         snprintf(buf, len, "grid %d^3 %s%s", m->grid_res, interp[m->interp],
                  m->grid_storage == SHL_GRID_DOUBLE ? " (double)" : "");
+        break;
+    case LM_AGRID:
+        snprintf(buf, len, "adaptive grid %d^3 %s tol %.3g, %ld nodes", m->grid_res,
+                 m->agrid_criterion == SHL_AGRID_MEAN ? "mean" : "max", m->agrid_tol, m->agrid_budget);
         break;
     case LM_MC: snprintf(buf, len, "Monte Carlo %ld samples", m->mc_samples); break;
     case LM_MONOMIAL: snprintf(buf, len, "per-vertex monomial baseline"); break;
@@ -102,7 +107,7 @@ lighting *lighting_prepare(const scene *s, const lighting_method *m, const doubl
         L->cdf[np + i] = total;
     }
     const double t0 = bench_now();
-    if (m->kind == LM_GRID) {
+    if (m->kind == LM_GRID || m->kind == LM_AGRID) {
         double lo[3], hi[3];
         for (int a = 0; a < 3; ++a) { /* a flat receiver set still needs a box */
             const double pad = hi_in[a] - lo_in[a] > 1e-9 ? 0.0 : 1e-6 + 1e-6 * fabs(lo_in[a]);
@@ -110,8 +115,11 @@ lighting *lighting_prepare(const scene *s, const lighting_method *m, const doubl
             hi[a] = hi_in[a] + pad;
         }
         const int res[3] = {m->grid_res, m->grid_res, m->grid_res};
-        if (shl_grid_create(L->ctx, lo, hi, res, m->grid_storage, &L->grid) != SHL_OK ||
-            shl_grid_fill(L->grid, L->set, nthreads) != SHL_OK)
+        if (m->kind == LM_AGRID ? shl_agrid_create(L->ctx, lo, hi, res, m->agrid_criterion, m->agrid_tol, m->agrid_budget,
+                                                   &L->agrid) != SHL_OK ||
+                                      shl_agrid_fill(L->agrid, L->set, nthreads) != SHL_OK
+                                : shl_grid_create(L->ctx, lo, hi, res, m->grid_storage, &L->grid) != SHL_OK ||
+                                      shl_grid_fill(L->grid, L->set, nthreads) != SHL_OK)
             goto fail;
     } else if (m->kind == LM_SINGLE || m->kind == LM_TAYLOR1) {
         L->nsamples = m->npoints > 1 ? m->npoints : 1;
@@ -141,6 +149,7 @@ void lighting_free(lighting *L)
 {
     if (!L) return;
     shl_grid_destroy(L->grid);
+    shl_agrid_destroy(L->agrid);
     shl_lights_destroy(L->set);
     shl_ctx_destroy(L->ctx);
     free(L->sample);
@@ -322,6 +331,9 @@ static void eval_block(void *arg, int worker, long begin, long end)
         break;
     case LM_GRID:
         if (shl_grid_interp(L->grid, L->m.interp, L->m.taylor_b, nb, pts, out, 1) != SHL_OK) goto fail;
+        break;
+    case LM_AGRID:
+        if (shl_agrid_interp(L->agrid, nb, pts, out, 1) != SHL_OK) goto fail;
         break;
     case LM_MC:
         for (int p = 0; p < nb; ++p)

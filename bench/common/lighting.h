@@ -4,6 +4,9 @@
  *  - ANALYTIC_F: shl_lights_eval_batch_f per vertex (float, SIMD kernels), polygons and spheres;
  *  - GRID:       a res^3 grid over the receivers (shl_grid_fill) interpolated by
  *                shl_grid_interp (Hermite, trilinear or Taylor);
+ *  - AGRID:      an adaptive grid over the receivers (shl_agrid_create with a coarse
+ *                grid_res^3 level, agrid_criterion, agrid_tol, agrid_budget; shl_agrid_fill)
+ *                interpolated by shl_agrid_interp;
  *  - MC:         Monte Carlo projection, N samples per vertex (light picked by power,
  *                polygons sampled by area, spheres by cone);
  *  - MONOMIAL:   the monomial-moment baseline (bench/common/monomial.h) per polygon,
@@ -20,12 +23,15 @@
 
 #define LIGHTING_MAX_SAMPLES 8
 
-typedef enum { LM_ANALYTIC, LM_ANALYTIC_F, LM_GRID, LM_MC, LM_MONOMIAL, LM_SINGLE, LM_TAYLOR1 } lighting_kind;
+typedef enum { LM_ANALYTIC, LM_ANALYTIC_F, LM_GRID, LM_MC, LM_MONOMIAL, LM_SINGLE, LM_TAYLOR1, LM_AGRID } lighting_kind;
 
 typedef struct {
     lighting_kind kind;
     int lmax;
     int grid_res, interp, grid_storage; /* GRID: resolution, SHL_INTERP_*, SHL_GRID_FLOAT / DOUBLE */
+    int agrid_criterion;                /* AGRID (coarse resolution grid_res): SHL_AGRID_MAX / MEAN, */
+    double agrid_tol;                   /* its tolerance (absolute) */
+    long agrid_budget;                  /* and node budget */
     double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR; SINGLE / TAYLOR1 with npoints > 1 */
     long mc_samples;                    /* MC */
     int mc_stratified;                  /* MC, polygon lights only: about mc_samples jittered strata split over
