@@ -16,7 +16,7 @@
  * Image error (the issue's measure): wu-fig12 and wu-monkey rendered as bench_tables renders them (their
  * meshes from --meshes DIR, else $SHLIGHT_MESHES, else ../shared/meshes; skipped with a note when
  * absent), per-vertex analytic float SIMD at the visible vertices as the reference, uniform grids
- * and adaptive grids (coarse 4^3, SHL_AGRID_MEAN; tolerances and budgets) lighting every vertex;
+ * and adaptive grids (SHL_AGRID_MEAN: coarse 4^3 and 8^3 at tolerances, 4^3 at budgets) lighting every vertex;
  * rel. MAE of the image (bench/common/image.h) against the reference; fill times from fills of the
  * same grids outside the frame.  Writes DIR/bench_agrid_image.csv:
  * scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae.
@@ -392,19 +392,19 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
     probe_init(&p, ctx, l, nthreads);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
-    const double rel[] = {3e-2, 1e-2, 5e-3, 3e-3, 2e-3, 1e-3};
-    const long budgets[] = {3000, 5000, 7000, 9000, 12000, 16000};
+    const double rel[] = {3e-2, 1e-2, 5e-3, 3e-3, 2e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5};
+    const long budgets[] = {3000, 5000, 7000, 9000, 12000, 16000, 24000};
     const int nrel = sizeof rel / sizeof rel[0], nb = sizeof budgets / sizeof budgets[0];
     m.kind = LM_AGRID;
-    m.grid_res = 4;
     m.agrid_criterion = SHL_AGRID_MEAN;
     long best_nodes = -1;
     double best_fill = INFINITY;
-    for (int k = 0; k < nrel + nb; ++k) {
-        m.agrid_tol = (k < nrel ? rel[k] : 1e-6) * p.mean_ref;
-        m.agrid_budget = k < nrel ? 32L * 32 * 32 : budgets[k - nrel];
-        image_row(f, &pr, &m, ref, exposure, img, reps, k < nrel ? "mean" : "budget", k < nrel ? rel[k] : 1e-6, &mae,
-                  &fill, &nodes);
+    for (int k = 0; k < 2 * nrel + nb; ++k) { /* coarse 4^3 and 8^3 at each tolerance; budgets at 4^3 */
+        m.grid_res = k < nrel || k >= 2 * nrel ? 4 : 8;
+        m.agrid_tol = (k < 2 * nrel ? rel[k % nrel] : 1e-6) * p.mean_ref;
+        m.agrid_budget = k < 2 * nrel ? 32L * 32 * 32 : budgets[k - 2 * nrel];
+        image_row(f, &pr, &m, ref, exposure, img, reps, k < 2 * nrel ? "mean" : "budget", k < 2 * nrel ? rel[k % nrel] : 1e-6,
+                  &mae, &fill, &nodes);
         if (mae <= u32_mae) {
             if (best_nodes < 0 || nodes < best_nodes) best_nodes = nodes;
             best_fill = fmin(best_fill, fill);

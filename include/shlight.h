@@ -320,8 +320,8 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * (coefficients and gradients, layouts of shl_lights_eval) filled through the float
  * SIMD light-set batch; interpolated with Wu 2020 Alg. 4 (tricubic Hermite) per level.
  *
- * Refinement (shl_agrid_fill): every cell of level 0, and every cell of level l >= 1
- * that is a child of a refined cell, gets the estimate
+ * Refinement (shl_agrid_fill): every cell of level 0, and the children of refined
+ * cells when they come up for refinement (below), get the estimate
  *   e = max over its two samples s = lo + (c + q) h_l, q = (1/4, 1/4, 1/4) and (3/4, 3/4, 3/4),
  *       and over the colours, of || A(s) - L(s) ||_2 over the nc coefficients,
  * A the adaptive interpolant built so far and L the light set by the float batch
@@ -336,17 +336,19 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * budget or the finest level, MEAN to about log_8(|L| / tol) levels).  Cells whose
  * criterion value exceeds tol are refined while the total node count stays
  * <= max_nodes (ring included, below), best first over all levels: by priority
- * e 8^-l (the estimate times the cell's volume: its share of the mean error, for
- * both criteria), in rounds that each refine the cells within a factor 2 of the
- * largest priority waiting, estimate the new cells and queue those above tol; the
- * fill stops when none is above tol or the budget refuses the next refinement (so
- * a tight budget goes where it lowers the mean error most).  Cells on the finest
- * level allowed are not estimated (no refinement can follow).  Assuming that
- * refinement does not increase e, some
- * cells keep a verdict instead of being estimated (and are never refined): the ring
- * cells of level l >= 1 (below; each lies in an unrefined level-(l-1) cell, criterion
- * within tol) and, for SHL_AGRID_MEAN, the children of a cell whose criterion was
- * <= 8 tol (a child's is then <= tol: one eighth the volume).
+ * p = e 8^-l (the estimate times the cell's volume: its share of the mean error,
+ * for both criteria), in rounds that each take the entries within a factor 2 of
+ * the largest priority waiting.  A refined cell's children wait unestimated, as one
+ * entry with the bounds that the assumption below gives (e_child <= e, so priority
+ * <= p / 8 and, for SHL_AGRID_MEAN, criterion <= e 8^-l / 8: dropped if that is
+ * <= tol); when that entry is taken they are estimated and those above tol queued.
+ * The fill stops when nothing above tol waits or the budget refuses the next
+ * refinement: a tight budget goes where it lowers the mean error most, and children
+ * whose bound never reaches the head cost no estimate.  Cells on the finest level
+ * allowed are not estimated (no refinement can follow).  Assuming that refinement
+ * does not increase e, some cells keep a verdict instead of being estimated (and are
+ * never refined): the ring cells of level l >= 1 (below; each lies in an unrefined
+ * level-(l-1) cell, criterion within tol) and the children dropped above.
  * An a-posteriori estimate is a measurement at two points per cell, not a bound:
  * the error elsewhere in a cell may exceed it (tests/test_agrid.c measures the
  * ratio at random points), and a feature smaller than a cell (a light's edge, a
@@ -379,8 +381,9 @@ typedef struct {
     int levels;          /* levels built, 1 = the coarse grid only */
     long samples;        /* estimate samples of the last fill (2 per cell estimated) */
     long unresolved;     /* cells estimated > tol and left unrefined (budget hit); -1: unknown,
-                            cells on the finest level allowed were not estimated; 0: every
-                            sample of the last fill within tol */
+                            cells on the finest level allowed, or children still waiting when
+                            the budget stopped the fill, were not estimated; 0: every sample
+                            of the last fill within tol */
     double max_estimate; /* largest criterion value (e or e 8^-l) of an estimated cell left unrefined
                             (0 before any fill) */
     int budget_hit;      /* 1 if the node budget stopped a refinement */

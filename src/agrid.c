@@ -304,11 +304,13 @@ int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double 
 enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
 
 /* A cell (index in its level), its estimate or criterion value e and its
- * refinement priority p = e 8^-l (e times its volume in coarse-cell units). */
+ * refinement priority p = e 8^-l (e times its volume in coarse-cell units); or, if
+ * pending, a refined cell whose children are not estimated yet, e and p bounds on
+ * theirs (build()). */
 typedef struct {
     double e, p;
     uint32_t cell;
-    int level;
+    int level, pending;
 } ranked;
 
 typedef struct {
@@ -533,7 +535,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
     int unknown = g->max_levels < 2; /* cells left that were not estimated (on the finest level) */
     if (!status && !unknown && !(status = reserve(&est, &ecap, 0, lev[0].ncells)))
-        for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0};
+        for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0, 0};
     while (!status) {
         /* the new cells' estimates; criterion values above tol join the queue */
         if ((status = estimate_cells(&job, est, ne, nthreads)) || (status = reserve(&queue, &qcap, nq, ne))) break;
@@ -548,13 +550,25 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         ne = 0;
         if (nq == 0 || st->budget_hit) break;
         qsort(queue, nq, sizeof *queue, by_estimate);
-        /* this round: refine the queue's head */
+        /* this round: refine the queue's head, or queue the children of its pending entries
+         * for estimation */
         const double thr = ROUND * queue[0].p;
         size_t cells0[SHL_AGRID_LEVELS_MAX], k = 0;
         for (int l = 0; l < SHL_AGRID_LEVELS_MAX; ++l) cells0[l] = lev[l].ncells;
         nd = 0;
         for (; k < nq && queue[k].p >= thr; ++k) {
             const int l = queue[k].level;
+            if (queue[k].pending) {
+                if ((status = reserve(&est, &ecap, ne, 8))) break;
+                int ci[3];
+                unkey(lev[l].cell_key[queue[k].cell], ci);
+                for (int j = 0; j < 8; ++j) {
+                    int cc[3];
+                    for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
+                    est[ne++] = (ranked){0.0, 0.0, (uint32_t)hfind(&lev[l + 1].cells, key3(cc)), l + 1, 0};
+                }
+                continue;
+            }
             if (l + 1 >= *nl) {
                 level_init(g, l + 1, lev + l + 1);
                 *nl = l + 2;
@@ -576,29 +590,34 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         if (status) break;
         for (int l = 1; l < *nl; ++l) resolve_cells(lev + l, cells0[l], 0);
         if ((status = eval_nodes(&job, *nl, nthreads))) break;
-        /* the refined cells' children are estimated, unless they are on the finest level
-         * allowed (no refinement can follow) or, for SHL_AGRID_MEAN, their parent's
-         * criterion was <= 8 tol (a child's is then <= tol: one eighth the volume) */
-        for (size_t d = 0; d < nd && !status; ++d) {
-            const int lc = done[d].level + 1;
-            if (lc + 1 >= g->max_levels) {
+        /* a refined cell's children wait in the queue, unestimated, as one pending entry
+         * with the bounds the assumption that refinement does not increase e gives
+         * (include/shlight.h): e_child <= e, so p_child <= p / 8 and, for
+         * SHL_AGRID_MEAN, criterion <= e / 8 (dropped if that is <= tol); they are
+         * estimated when the entry reaches the head (never, if the budget runs out
+         * first).  Children on the finest level allowed are not estimated. */
+        if ((status = reserve(&queue, &qcap, nq, nd))) break;
+        for (size_t d = 0; d < nd; ++d) {
+            if (done[d].level + 2 >= g->max_levels) {
                 unknown = 1;
                 continue;
             }
-            if (g->criterion == SHL_AGRID_MEAN && done[d].e <= 8.0 * g->tol) continue;
-            if ((status = reserve(&est, &ecap, ne, 8))) break;
-            int ci[3];
-            unkey(lev[lc - 1].cell_key[done[d].cell], ci);
-            for (int j = 0; j < 8; ++j) {
-                int cc[3];
-                for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
-                est[ne++] = (ranked){0.0, 0.0, (uint32_t)hfind(&lev[lc].cells, key3(cc)), lc};
-            }
+            const ranked r = {g->criterion == SHL_AGRID_MEAN ? done[d].e / 8.0 : done[d].e, done[d].p / 8.0, done[d].cell,
+                              done[d].level, 1};
+            if (r.e > g->tol) queue[nq++] = r;
         }
     }
     if (!status) {
-        for (size_t k = 0; k < nq; ++k) st->max_estimate = fmax(st->max_estimate, queue[k].e);
-        st->unresolved = unknown ? -1 : (long)nq;
+        long real = 0;
+        for (size_t k = 0; k < nq; ++k) {
+            if (queue[k].pending) {
+                unknown = 1;
+                continue;
+            }
+            st->max_estimate = fmax(st->max_estimate, queue[k].e);
+            ++real;
+        }
+        st->unresolved = unknown ? -1 : real;
         for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
         fill_stats(g, lev, *nl, st);
     }
