@@ -15,7 +15,7 @@ Writes SVG and PNG files:
   hvl2022_table1            HVL gathering time vs HVL count, per band count
   agrid_<scene>             adaptive vs uniform grids: error vs nodes and vs fill time
                             (bench_agrid.csv: build/bench/bench_agrid -d <tables dir>)
-  agrid_image               the same on the rendered wu-fig12 image (bench_agrid_image.csv, same run)
+  agrid_image_<scene>       the same on rendered images (bench_agrid_image.csv, same run)
   wu2020_fig4, wu2020_fig6  one coefficient along a line; gradient images vs finite differences
   annen2004_fig8            error of one extrapolated sample vs distance
   wang2018_fig4, wang2018_fig5, wu2020_fig7, wu2020_fig12, hvl2022_table2
@@ -359,26 +359,32 @@ def agrid(rows, out):
 
 
 def agrid_image(rows, out):
-    """bench/bench_agrid.c, rendered wu-fig12: image rel. MAE vs nodes and vs fill time, uniform grids
-    and adaptive ones (tolerance- and budget-driven), the uniform 32^3 error as a dashed line."""
-    kinds = OrderedDict([("uniform", ("o", "tab:blue")), ("mean", ("^", "tab:green")), ("budget", ("v", "tab:orange"))])
-    u32 = [float(r["rel_mae"]) for r in rows if r["kind"] == "uniform" and r["res"] == "32"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, xkey, xlabel, scale in ((axes[0], "nodes", "nodes", 1.0), (axes[1], "fill_s", "fill time (ms)", 1e3)):
-        for kind, (marker, color) in kinds.items():
-            pts = sorted((float(r[xkey]) * scale, float(r["rel_mae"])) for r in rows if r["kind"] == kind)
-            if pts:
-                ax.plot(*zip(*pts), marker=marker, color=color, linestyle="-" if kind != "mean" else ":", label=kind)
-        if u32:
-            ax.axhline(u32[0], color="tab:blue", linestyle="--", linewidth=0.8, label="uniform 32^3")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel("image MAE / mean radiance")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle("wu-fig12 rendered: adaptive (coarse 4^3, SHL_AGRID_MEAN) vs uniform grids (lmax 8, Hermite)")
-    save(fig, out, "agrid_image")
+    """bench/bench_agrid.c, rendered scenes: image rel. MAE vs nodes and vs fill time, uniform grids and
+    adaptive ones (tolerance-driven per coarse resolution, budget-driven), uniform 32^3's error dashed."""
+    styles = (("uniform", "o", "tab:blue", "-"), ("mean", "^", "tab:green", ":"), ("budget", "v", "tab:orange", "-"))
+    for scene in OrderedDict((r["scene"], 1) for r in rows):
+        srows = [r for r in rows if r["scene"] == scene]
+        u32 = [float(r["rel_mae"]) for r in srows if r["kind"] == "uniform" and r["res"] == "32"]
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+        for ax, xkey, xlabel in ((axes[0], "nodes", "nodes"), (axes[1], "fill_s", "fill time (ms)")):
+            for kind, marker, color, ls in styles:
+                groups = [None] if kind == "uniform" else OrderedDict((r["res"], 1) for r in srows if r["kind"] == kind)
+                for res in groups:  # uniform: one curve over its resolutions; adaptive: one per coarse resolution
+                    pts = sorted((float(r[xkey]) * (1e3 if xkey == "fill_s" else 1.0), float(r["rel_mae"]))
+                                 for r in srows if r["kind"] == kind and res in (None, r["res"]))
+                    label = kind if kind == "uniform" else f"{kind}, coarse {res}^3"
+                    ax.plot(*zip(*pts), marker=marker, color=color, linestyle=ls, label=label,
+                            alpha=1.0 if kind != "mean" or res == "4" else 0.55)
+            if u32:
+                ax.axhline(u32[0], color="tab:blue", linestyle="--", linewidth=0.8, label="uniform 32^3")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel("image MAE / mean radiance")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(f"{scene} rendered: adaptive (SHL_AGRID_MEAN) vs uniform grids (lmax 8, Hermite)")
+        save(fig, out, f"agrid_image_{scene}")
 
 
 def main():
