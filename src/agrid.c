@@ -533,7 +533,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     long total = (long)lev[0].nnodes;
     ranked *queue = NULL, *est = NULL, *done = NULL;
     size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
-    int unknown = g->max_levels < 2; /* cells left that were not estimated (on the finest level) */
+    int unknown = g->max_levels < 2; /* cells left unestimated: on the finest level, or children still waiting */
     if (!status && !unknown && !(status = reserve(&est, &ecap, 0, lev[0].ncells)))
         for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0, 0};
     while (!status) {
