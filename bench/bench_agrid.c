@@ -1,30 +1,30 @@
 /* Adaptive vs uniform grids (issue 19 item 3): error vs nodes and error vs fill time
  * on Wu 2020's Fig. 12 case (bench/scenes/wu-fig12.scene: a two-sided quad inside the
  * grid's box) and on a Table 1 stand-in (wu-monkey.scene: every light outside the box).
- * Lights from the scene files (their mesh objects are not needed and are skipped); the
- * box is the receivers' bounding box the scene files state, x, z in [-2.5, 2.5],
- * y in [0, 1.9].  lmax 8, float nodes, Hermite.
- * Error: at NPTS random points uniform in the box and NPTS on the floor (y = 0, the
- * receiver plane the Fig. 12 light stands on), e(p) = max over colours of the L2 norm
- * of the coefficient error against shl_lights_eval (double), i.e. the L2 error of the
- * radiance function over the sphere (Parseval); reported as mean e / mean |L| (rel.
- * MAE) over both sets.  A proxy for the image error of bench_tables (no rendering).
- * Ratios: against uniform 32^3, the adaptive run with the fewest nodes and the one with
- * the least fill time among those at an error <= uniform 32^3's (rel. MAE; on wu-monkey
- * also the largest error: on wu-fig12 that is the jump across the light, unresolved by any
- * grid); all from this run.
- * Image error (the issue's measure): wu-fig12 and wu-monkey rendered as bench_tables renders them (their
- * meshes from --meshes DIR, else $SHLIGHT_MESHES, else ../shared/meshes; skipped with a note when
- * absent), per-vertex analytic float SIMD at the visible vertices as the reference, uniform grids
- * and adaptive grids (SHL_AGRID_MEAN: coarse 4^3 and 8^3 at tolerances, 4^3 at budgets) lighting every vertex;
- * rel. MAE of the image (bench/common/image.h) against the reference; fill times from fills of the
- * same grids outside the frame.  Writes DIR/bench_agrid_image.csv:
+ * lmax 8, float nodes, Hermite.
+ * 1. Coefficient proxy: lights from the scene files (mesh objects skipped); the box is the
+ * receivers' bounding box the scene files state, x, z in [-2.5, 2.5], y in [0, 1.9].  At
+ * NPTS random points uniform in the box and NPTS on the floor (y = 0, the receiver plane the
+ * Fig. 12 light stands on), e(p) = max over colours of the L2 norm of the coefficient error
+ * against shl_lights_eval (double), i.e. the L2 error of the radiance function over the
+ * sphere (Parseval); reported as mean e / mean |L| (rel. MAE) over both sets.  Ratios:
+ * against uniform 32^3, the adaptive run with the fewest nodes and the one with the least
+ * fill time among those at an error <= uniform 32^3's (rel. MAE; on wu-monkey also the
+ * largest error: on wu-fig12 that is the jump across the light, unresolved by any grid).
+ * Writes DIR/bench_agrid.csv: scene,kind,res,tol,nodes,samples,levels,fill_s,cpu_s,rel_mae,
+ * rel_max,bytes (fill_s wall, cpu_s process CPU time of the fill, best of the repetitions;
+ * samples: the estimate's light-set evaluations without gradients (stats.samples), the
+ * fill's cost beyond its nodes; with the node count a cost proxy that load does not disturb).
+ * 2. Image error (the issue's measure): both scenes rendered as bench_tables renders them
+ * (meshes from --meshes DIR, else $SHLIGHT_MESHES, else ../shared/meshes; skipped with a
+ * note when absent), per-vertex analytic float SIMD at the visible vertices as the
+ * reference, uniform grids and adaptive grids (SHL_AGRID_MEAN: coarse 4^3 and 8^3 at
+ * tolerances, 4^3 at budgets) lighting every vertex; rel. MAE of the image
+ * (bench/common/image.h) against the reference; fill times from fills of the same grids
+ * outside the frame.  Writes DIR/bench_agrid_image.csv:
  * scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae.
- * Usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR]; writes DIR/bench_agrid.csv
- * (default build/bench): scene,kind,res,tol,nodes,samples,levels,fill_s,cpu_s,rel_mae,rel_max,bytes
- * (fill_s wall, cpu_s process CPU time of the fill, best of the repetitions).
- * samples: the estimate's light-set evaluations without gradients (stats.samples), the fill's
- * cost beyond its nodes; with the node count a cost proxy that load does not disturb. */
+ * All from this run.  Usage: bench_agrid [--quick] [--threads N]
+ * [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR] (default DIR build/bench). */
 #include "image.h"
 #include "meshes.h"
 #include "prt.h"
