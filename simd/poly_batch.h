@@ -113,41 +113,78 @@ size_t ISA(shl__poly_work_bytes)(int lmax, int with_grad)
 #define GEO(w, v, f) ((w)->geo + ((size_t)(v) * NF + (f)) * VL)
 #define KV(w, l, k) vf_load((w)->kv + ((size_t)(l) * NK + (k)) * VL)
 
+/* The lanes' set-up runs in double, VD lanes at a time (half a float vector: the
+ * ISA's double register) in the compilers' generic vectors (as
+ * simd/poly_zh_batch.h): elementwise arithmetic and compares, selects as bit masks. */
+#if VL > 1
+#define VD (VL / 2)
+#else
+#define VD 1
+#endif
+typedef double vdl __attribute__((vector_size(VD * sizeof(double))));
+typedef long long vml __attribute__((vector_size(VD * sizeof(long long))));
+typedef float vfl __attribute__((vector_size(VD * sizeof(float))));
+
+static inline vdl vdl_set1(double a)
+{
+    vdl v;
+    for (int j = 0; j < VD; ++j) v[j] = a;
+    return v;
+}
+static inline vdl vdl_sel(vml m, vdl a, vdl b) { return (vdl)(((vml)a & m) | ((vml)b & ~m)); } /* m ? a : b */
+static inline vdl vdl_abs(vdl a) { return (vdl)((vml)a & ~(vml)vdl_set1(-0.0)); }
+static inline void vdl_store_float(float *p, vdl a)
+{
+    const vfl f = __builtin_convertvector(a, vfl);
+    memcpy(p, &f, sizeof f);
+}
+
 /* Lanes of a block, in double: the scaled point (stored relative to v_0, as are P->v and
  * P->proxy: a polygon far from the origin stays within float range), the plane test of
  * shl_polygon_f (polygon.c, shl__poly_geom_init; squared form), and h = normal . (v_0 - x).
  * Lanes past nvalid, in the plane, or farther than 2^40 extents from the polygon
  * (products of three distances must stay in float range) evaluate the proxy
  * point with valid = 0.  (A valid point is at least 2^-50 extents from every
- * vertex, its height; the rmin2 test only guards that bound.) */
-static void lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, work_t *w)
+ * vertex, its height; the rmin2 test only guards that bound.)
+ * Also the points the float geometry cannot resolve (the test and its error
+ * analysis: shl__batch_poly_eval, src/batch.c): their indices p0 + j go to redo;
+ * returns their number. */
+static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, work_t *w, int p0, int *redo)
 {
-    const double tol = 8.0 * DBL_EPSILON;
-    for (int j = 0; j < VL; ++j) {
-        double x[3], h = 0.0;
-        int ok = j < nvalid;
-        if (ok) {
-            double rmax2 = 0.0, rmin2 = HUGE_VAL; /* no fmax/fmin: libm calls */
-            for (int k = 0; k < 3; ++k) x[k] = pts[3 * j + k] * P->inv_scale;
-            for (int i = 0; i < P->n; ++i) {
-                const double d[3] = {P->vd[i][0] - x[0], P->vd[i][1] - x[1], P->vd[i][2] - x[2]};
-                const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                rmax2 = d2 > rmax2 ? d2 : rmax2;
-                rmin2 = d2 < rmin2 ? d2 : rmin2;
-            }
-            h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
-                P->normal[2] * (P->vd[0][2] - x[2]);
-            ok = h * h > tol * tol * rmax2 * P->len2 && rmin2 >= 0x1p-100 && rmax2 <= 0x1p80;
-            for (int k = 0; k < 3; ++k) x[k] -= P->vd[0][k]; /* relative to v_0, as P->v (float range) */
+    const double tol = 8.0 * DBL_EPSILON, pp = P->perimeter * P->perimeter * 0x1p10;
+    const double hp = -(P->normal[0] * P->proxy[0] + P->normal[1] * P->proxy[1] + P->normal[2] * P->proxy[2]);
+    int count = 0;
+    for (int j0 = 0; j0 < VL; j0 += VD) {
+        vdl x[3], lane;
+        for (int j = 0; j < VD; ++j) { /* lanes past nvalid repeat point 0 (finite; masked below) */
+            const float *pt = pts + 3 * (j0 + j < nvalid ? j0 + j : 0);
+            for (int k = 0; k < 3; ++k) x[k][j] = pt[k] * P->inv_scale;
+            lane[j] = j0 + j;
         }
-        if (!ok) {
-            memcpy(x, P->proxy, sizeof x);
-            h = -(P->normal[0] * x[0] + P->normal[1] * x[1] + P->normal[2] * x[2]);
+        vdl rmax2 = vdl_set1(0.0), rmin2 = vdl_set1(HUGE_VAL);
+        for (int i = 0; i < P->n; ++i) {
+            const vdl d0 = vdl_set1(P->vd[i][0]) - x[0], d1 = vdl_set1(P->vd[i][1]) - x[1];
+            const vdl d2 = vdl_set1(P->vd[i][2]) - x[2], r2 = d0 * d0 + d1 * d1 + d2 * d2;
+            rmax2 = vdl_sel(r2 > rmax2, r2, rmax2);
+            rmin2 = vdl_sel(r2 < rmin2, r2, rmin2);
         }
-        for (int k = 0; k < 3; ++k) w->lane[k * VL + j] = (float)x[k];
-        w->lane[3 * VL + j] = (float)h;
-        w->lane[4 * VL + j] = ok ? 1.0f : 0.0f;
+        const vdl h = vdl_set1(P->normal[0]) * (vdl_set1(P->vd[0][0]) - x[0]) +
+                      vdl_set1(P->normal[1]) * (vdl_set1(P->vd[0][1]) - x[1]) +
+                      vdl_set1(P->normal[2]) * (vdl_set1(P->vd[0][2]) - x[2]);
+        const vdl h2 = h * h;
+        const vml seen = (lane < vdl_set1(nvalid)) & (h2 > vdl_set1(tol * tol) * rmax2 * vdl_set1(P->len2)) &
+                         (rmax2 <= vdl_set1(0x1p80));
+        const vml ok = seen & (rmin2 >= vdl_set1(0x1p-100));
+        const vml unres = seen & ((h2 <= vdl_set1(0x1p-32) * rmax2 * vdl_set1(P->len2)) | (rmin2 < vdl_set1(0x1p-32)) |
+                                  (vdl_set1(pp) < rmin2) | (vdl_set1(P->perimeter) * rmax2 > vdl_set1(0x1p13) * vdl_abs(h)));
+        for (int k = 0; k < 3; ++k) /* relative to v_0, as P->v (float range) */
+            vdl_store_float(w->lane + k * VL + j0, vdl_sel(ok, x[k] - vdl_set1(P->vd[0][k]), vdl_set1(P->proxy[k])));
+        vdl_store_float(w->lane + 3 * VL + j0, vdl_sel(ok, h, vdl_set1(hp)));
+        vdl_store_float(w->lane + 4 * VL + j0, vdl_sel(ok, vdl_set1(1.0), vdl_set1(0.0)));
+        for (int j = 0; j < VD; ++j)
+            if (unres[j]) redo[count++] = p0 + j0 + j;
     }
+    return count;
 }
 
 /* Per-vertex and per-edge geometry of the block's points (cf. shl__poly_geom_init),
@@ -450,9 +487,10 @@ static void store_rows(const float *soa, int nrows, float *out, size_t stride, i
         for (int j = 0; j < nvalid; ++j) out[j * stride + k] = soa[(size_t)k * VL + j];
 }
 
-static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
-                                          float *coeffs, float *grad, void *work, const int with_grad)
+static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
+                                         float *coeffs, float *grad, void *work, int *redo, const int with_grad)
 {
+    int nredo = 0;
     const int L = lmax + 1, nc = L * L, nq = with_grad ? 4 : 1;
     work_t w;
     work_floats(lmax, nq, &w, (float *)(((uintptr_t)work + 63) & ~(uintptr_t)63));
@@ -473,7 +511,7 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
     const float gs1 = (float)(P->inv_scale / gs0);
     for (int p0 = 0; p0 < npts; p0 += VL) {
         const int nvalid = npts - p0 < VL ? npts - p0 : VL;
-        lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w);
+        nredo += lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w, p0, redo + nredo);
         const vf omega = geometry(P, &w, with_grad);
         /* result = sign(S_0) * (input-order result); masked lanes get 0 */
         const vf fs = vf_mulsign(vf_load(w.lane + 4 * VL), omega);
@@ -487,13 +525,12 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
         store_rows(w.soa, nc, coeffs + (size_t)p0 * nc, (size_t)nc, nvalid);
         if (with_grad) store_rows(w.soa + (size_t)nc * VL, 3 * nc, grad + (size_t)p0 * 3 * nc, 3 * (size_t)nc, nvalid);
     }
+    return nredo;
 }
 
-void ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs,
-                          float *grad, void *work)
+int ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs, float *grad,
+                         void *work, int *redo)
 {
-    if (grad)
-        poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, 1);
-    else
-        poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, 0);
+    if (grad) return poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, redo, 1);
+    return poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, redo, 0);
 }
