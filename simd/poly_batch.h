@@ -436,14 +436,67 @@ static ALWAYS_INLINE void lobes_zh(const shl__batch_poly *P, work_t *w, int lmax
         }
 }
 
-/* out[i * ostep] = sum_k wt[i * ncol + k] x[k * xstep] for rows i < nrow, four rows
- * at a time (independent FMA chains sharing the loads of x). */
-static void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_t xstep, float *out, ptrdiff_t ostep)
+/* out_q[i * ostep] = sum_k wt[i * ncol + k] x_q[k * xstep] for rows i < nrow and the
+ * nq quantities (x_q = x + q xq, out_q = out + q oq) that share the matrix.  An FMA
+ * has a latency of about 4 cycles and 2 issue per cycle: 8 independent chains keep
+ * both FMA units busy, so the rows go two at a time for the 4 quantities of the
+ * gradient batch (each x_q load serves both rows, each weight all 4 quantities);
+ * one quantity goes four rows at a time.  Every sum runs in k order from 0, so
+ * coefficients are the same bits with and without gradients. */
+static ALWAYS_INLINE void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_t xstep, ptrdiff_t xq,
+                                 float *out, ptrdiff_t ostep, ptrdiff_t oq, const int nq)
 {
+    const vf zero = vf_set1(0.0f);
     int i = 0;
+    if (nq == 4) {
+        for (; i + 2 <= nrow; i += 2) {
+            const float *w0 = wt + (size_t)i * ncol, *w1 = w0 + ncol;
+            vf a0 = zero, a1 = zero, a2 = zero, a3 = zero, b0 = zero, b1 = zero, b2 = zero, b3 = zero;
+            for (int k = 0; k < ncol; ++k) {
+                const float *xk = x + k * xstep;
+                const vf x0 = vf_load(xk), x1 = vf_load(xk + xq), x2 = vf_load(xk + 2 * xq), x3 = vf_load(xk + 3 * xq);
+                const vf u = vf_set1(w0[k]), v = vf_set1(w1[k]);
+                a0 = vf_fma(u, x0, a0);
+                a1 = vf_fma(u, x1, a1);
+                a2 = vf_fma(u, x2, a2);
+                a3 = vf_fma(u, x3, a3);
+                b0 = vf_fma(v, x0, b0);
+                b1 = vf_fma(v, x1, b1);
+                b2 = vf_fma(v, x2, b2);
+                b3 = vf_fma(v, x3, b3);
+            }
+            float *o = out + i * ostep;
+            vf_store(o, a0);
+            vf_store(o + oq, a1);
+            vf_store(o + 2 * oq, a2);
+            vf_store(o + 3 * oq, a3);
+            vf_store(o + ostep, b0);
+            vf_store(o + ostep + oq, b1);
+            vf_store(o + ostep + 2 * oq, b2);
+            vf_store(o + ostep + 3 * oq, b3);
+        }
+        for (; i < nrow; ++i) {
+            const float *w0 = wt + (size_t)i * ncol;
+            vf a0 = zero, a1 = zero, a2 = zero, a3 = zero;
+            for (int k = 0; k < ncol; ++k) {
+                const float *xk = x + k * xstep;
+                const vf u = vf_set1(w0[k]);
+                a0 = vf_fma(u, vf_load(xk), a0);
+                a1 = vf_fma(u, vf_load(xk + xq), a1);
+                a2 = vf_fma(u, vf_load(xk + 2 * xq), a2);
+                a3 = vf_fma(u, vf_load(xk + 3 * xq), a3);
+            }
+            float *o = out + i * ostep;
+            vf_store(o, a0);
+            vf_store(o + oq, a1);
+            vf_store(o + 2 * oq, a2);
+            vf_store(o + 3 * oq, a3);
+        }
+        return;
+    }
     for (; i + 4 <= nrow; i += 4) {
         const float *w0 = wt + (size_t)i * ncol;
-        vf a0 = vf_set1(0.0f), a1 = a0, a2 = a0, a3 = a0;
+        vf a0 = zero, a1 = zero, a2 = zero, a3 = zero;
         for (int k = 0; k < ncol; ++k) {
             const vf xk = vf_load(x + k * xstep);
             a0 = vf_fma(vf_set1(w0[k]), xk, a0);
@@ -457,7 +510,7 @@ static void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_
         vf_store(out + (i + 3) * ostep, a3);
     }
     for (; i < nrow; ++i) {
-        vf a0 = vf_set1(0.0f);
+        vf a0 = zero;
         for (int k = 0; k < ncol; ++k) a0 = vf_fma(vf_set1(wt[(size_t)i * ncol + k]), vf_load(x + k * xstep), a0);
         vf_store(out + i * ostep, a0);
     }
@@ -465,17 +518,18 @@ static void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_
 
 /* The sparse ZH -> SH reconstruction (Wang 2018 Eq. 33, zh_tables.h) of every
  * band and quantity, from the paired sums u_k and differences v_k. */
-static void reconstruct(const work_t *w, int lmax, int nq)
+static ALWAYS_INLINE void reconstruct(const work_t *w, int lmax, const int nq)
 {
     const int L = lmax + 1, nc = L * L;
-    for (int q = 0; q < nq; ++q)
-        for (int l = 0; l <= lmax; ++l) {
-            const float *u = w->u + ((size_t)q * L * L + l) * VL, *v = w->v + ((size_t)q * L * L + l) * VL;
-            float *out = w->soa + ((size_t)q * nc + l * (l + 1)) * VL;
-            matvec(shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, u, (ptrdiff_t)L * VL, out, VL);
-            if (l > 0) /* m = -1 .. -l, from v_1 .. v_l */
-                matvec(shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l), l, l, v + (size_t)L * VL, (ptrdiff_t)L * VL, out - VL, -VL);
-        }
+    const ptrdiff_t xq = (ptrdiff_t)L * L * VL, oq = (ptrdiff_t)nc * VL;
+    for (int l = 0; l <= lmax; ++l) {
+        const float *u = w->u + (size_t)l * VL, *v = w->v + (size_t)l * VL;
+        float *out = w->soa + (size_t)l * (l + 1) * VL;
+        matvec(shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, u, (ptrdiff_t)L * VL, xq, out, VL, oq, nq);
+        if (l > 0) /* m = -1 .. -l, from v_1 .. v_l */
+            matvec(shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l), l, l, v + (size_t)L * VL, (ptrdiff_t)L * VL, xq, out - VL, -VL, oq,
+                   nq);
+    }
 }
 
 /* Rows soa[k] (one vector per row, lane j = point j) to out[j * stride + k], j < nvalid. */
@@ -519,7 +573,7 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
         lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad);
         for (int k = 1; k <= lmax; ++k) /* lobe pairs (2k-1, 2k), mirror images in y */
             lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad);
-        reconstruct(&w, lmax, nq);
+        reconstruct(&w, lmax, with_grad ? 4 : 1);
         for (size_t r = nc; gs1 != 1.0f && r < (size_t)nq * nc; ++r)
             vf_store(w.soa + r * VL, vf_mul(vf_load(w.soa + r * VL), vf_set1(gs1)));
         store_rows(w.soa, nc, coeffs + (size_t)p0 * nc, (size_t)nc, nvalid);
