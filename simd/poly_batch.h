@@ -516,19 +516,55 @@ static ALWAYS_INLINE void matvec(const float *wt, int nrow, int ncol, const floa
     }
 }
 
+/* Rows i..i+3 of both matrices of band l, one quantity: the even ones (l + 1 columns,
+ * from u, to out + r VL) and the odd ones (l columns, from v, to out - (r + 1) VL),
+ * i + 4 <= l: 8 independent chains, each summed in k order from 0 as in matvec. */
+static ALWAYS_INLINE void matvec_pair4(const float *we, const float *wo, int l, int i, const float *u, const float *v,
+                                       ptrdiff_t xstep, float *out)
+{
+    const int ne = l + 1;
+    const float *e0 = we + (size_t)i * ne, *o0 = wo + (size_t)i * l;
+    vf a0 = vf_set1(0.0f), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
+    for (int k = 0; k < l; ++k) {
+        const vf xu = vf_load(u + k * xstep), xv = vf_load(v + k * xstep);
+        a0 = vf_fma(vf_set1(e0[k]), xu, a0);
+        a1 = vf_fma(vf_set1(e0[ne + k]), xu, a1);
+        a2 = vf_fma(vf_set1(e0[2 * ne + k]), xu, a2);
+        a3 = vf_fma(vf_set1(e0[3 * ne + k]), xu, a3);
+        b0 = vf_fma(vf_set1(o0[k]), xv, b0);
+        b1 = vf_fma(vf_set1(o0[l + k]), xv, b1);
+        b2 = vf_fma(vf_set1(o0[2 * l + k]), xv, b2);
+        b3 = vf_fma(vf_set1(o0[3 * l + k]), xv, b3);
+    }
+    const vf xu = vf_load(u + l * xstep);
+    float *oe = out + (ptrdiff_t)i * VL, *oo = out - (ptrdiff_t)(i + 1) * VL;
+    vf_store(oe, vf_fma(vf_set1(e0[l]), xu, a0));
+    vf_store(oe + VL, vf_fma(vf_set1(e0[ne + l]), xu, a1));
+    vf_store(oe + 2 * VL, vf_fma(vf_set1(e0[2 * ne + l]), xu, a2));
+    vf_store(oe + 3 * VL, vf_fma(vf_set1(e0[3 * ne + l]), xu, a3));
+    vf_store(oo, b0);
+    vf_store(oo - VL, b1);
+    vf_store(oo - 2 * VL, b2);
+    vf_store(oo - 3 * VL, b3);
+}
+
 /* The sparse ZH -> SH reconstruction (Wang 2018 Eq. 33, zh_tables.h) of every
- * band and quantity, from the paired sums u_k and differences v_k. */
+ * band and quantity, from the paired sums u_k and differences v_k (m = -1 .. -l
+ * from v_1 .. v_l).  One quantity: rows of the even and odd matrices four and four
+ * together (matvec_pair4), the rest through matvec. */
 static ALWAYS_INLINE void reconstruct(const work_t *w, int lmax, const int nq)
 {
     const int L = lmax + 1, nc = L * L;
-    const ptrdiff_t xq = (ptrdiff_t)L * L * VL, oq = (ptrdiff_t)nc * VL;
+    const ptrdiff_t xs = (ptrdiff_t)L * VL, xq = (ptrdiff_t)L * L * VL, oq = (ptrdiff_t)nc * VL;
     for (int l = 0; l <= lmax; ++l) {
-        const float *u = w->u + (size_t)l * VL, *v = w->v + (size_t)l * VL;
+        const float *u = w->u + (size_t)l * VL, *v = w->v + (size_t)(L + l) * VL;
+        const float *we = shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l);
         float *out = w->soa + (size_t)l * (l + 1) * VL;
-        matvec(shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, u, (ptrdiff_t)L * VL, xq, out, VL, oq, nq);
-        if (l > 0) /* m = -1 .. -l, from v_1 .. v_l */
-            matvec(shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l), l, l, v + (size_t)L * VL, (ptrdiff_t)L * VL, xq, out - VL, -VL, oq,
-                   nq);
+        int i = 0;
+        if (nq == 1)
+            for (; i + 4 <= l; i += 4) matvec_pair4(we, wo, l, i, u, v, xs, out);
+        matvec(we + (size_t)i * (l + 1), l + 1 - i, l + 1, u, xs, xq, out + (ptrdiff_t)i * VL, VL, oq, nq);
+        if (l > i) matvec(wo + (size_t)i * l, l - i, l, v, xs, xq, out - (ptrdiff_t)(i + 1) * VL, -VL, oq, nq);
     }
 }
 
