@@ -5,7 +5,6 @@
  * (src/lights_batch.c) run the same two steps per polygon. */
 #include "parallel.h"
 #include "polygon.h"
-#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
