@@ -27,13 +27,17 @@ typedef struct {
     float fan[SHL_MAX_VERTS];
     float unit_normal[3], inv_len; /* normal / |normal|, 1 / |normal| */
     double proxy[3];              /* an off-plane point relative to vd[0], evaluated in masked lanes */
+    double perimeter;             /* of vd (the unresolved-point test, src/batch.c) */
 } shl__batch_poly;
 
 /* Kernel arguments: points pts[3p..3p+2] (unscaled floats) for 0 <= p < npts;
  * coeffs + p*nc and, if grad != NULL, grad + 3*nc*p as for shl_polygon_grad_f.
- * work: shl__isa.poly_work_bytes(lmax, grad != NULL) bytes, any alignment. */
-typedef void (*shl__poly_batch_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts,
-                                   float *coeffs, float *grad, void *work);
+ * work: shl__isa.poly_work_bytes(lmax, grad != NULL) bytes, any alignment.
+ * Returns the number of points its float geometry cannot resolve (the test of
+ * shl__batch_poly_eval, src/batch.c), their indices in increasing order in
+ * redo[0..] (room for npts). */
+typedef int (*shl__poly_batch_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts, float *coeffs,
+                                  float *grad, void *work, int *redo);
 
 /* Grid interpolation at one point (src/interp.c): the 8 corners of its cell
  * and the weights of the three methods, set up in double. */
@@ -141,8 +145,8 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
  * simd/isa_list.h by src/dispatch.c. */
 #define SHL__DECLARE_KERNELS(isa)                                                                      \
     size_t shl__poly_work_bytes_##isa(int lmax, int with_grad);                                        \
-    void shl__poly_batch_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,      \
-                               float *coeffs, float *grad, void *work);                                \
+    int shl__poly_batch_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,       \
+                              float *coeffs, float *grad, void *work, int *redo);                      \
     size_t shl__sphere_work_bytes_##isa(int lmax, int with_grad);                                      \
     void shl__sphere_batch_##isa(int lmax, const double center[3], double radius, int npts, const float *pts, \
                                  float *coeffs, float *grad, void *work);                              \

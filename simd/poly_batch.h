@@ -113,41 +113,78 @@ size_t ISA(shl__poly_work_bytes)(int lmax, int with_grad)
 #define GEO(w, v, f) ((w)->geo + ((size_t)(v) * NF + (f)) * VL)
 #define KV(w, l, k) vf_load((w)->kv + ((size_t)(l) * NK + (k)) * VL)
 
+/* The lanes' set-up runs in double, VD lanes at a time (half a float vector: the
+ * ISA's double register) in the compilers' generic vectors (as
+ * simd/poly_zh_batch.h): elementwise arithmetic and compares, selects as bit masks. */
+#if VL > 1
+#define VD (VL / 2)
+#else
+#define VD 1
+#endif
+typedef double vdl __attribute__((vector_size(VD * sizeof(double))));
+typedef long long vml __attribute__((vector_size(VD * sizeof(long long))));
+typedef float vfl __attribute__((vector_size(VD * sizeof(float))));
+
+static inline vdl vdl_set1(double a)
+{
+    vdl v;
+    for (int j = 0; j < VD; ++j) v[j] = a;
+    return v;
+}
+static inline vdl vdl_sel(vml m, vdl a, vdl b) { return (vdl)(((vml)a & m) | ((vml)b & ~m)); } /* m ? a : b */
+static inline vdl vdl_abs(vdl a) { return (vdl)((vml)a & ~(vml)vdl_set1(-0.0)); }
+static inline void vdl_store_float(float *p, vdl a)
+{
+    const vfl f = __builtin_convertvector(a, vfl);
+    memcpy(p, &f, sizeof f);
+}
+
 /* Lanes of a block, in double: the scaled point (stored relative to v_0, as are P->v and
  * P->proxy: a polygon far from the origin stays within float range), the plane test of
  * shl_polygon_f (polygon.c, shl__poly_geom_init; squared form), and h = normal . (v_0 - x).
  * Lanes past nvalid, in the plane, or farther than 2^40 extents from the polygon
  * (products of three distances must stay in float range) evaluate the proxy
  * point with valid = 0.  (A valid point is at least 2^-50 extents from every
- * vertex, its height; the rmin2 test only guards that bound.) */
-static void lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, work_t *w)
+ * vertex, its height; the rmin2 test only guards that bound.)
+ * Also the points the float geometry cannot resolve (the test and its error
+ * analysis: shl__batch_poly_eval, src/batch.c): their indices p0 + j go to redo;
+ * returns their number. */
+static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, work_t *w, int p0, int *redo)
 {
-    const double tol = 8.0 * DBL_EPSILON;
-    for (int j = 0; j < VL; ++j) {
-        double x[3], h = 0.0;
-        int ok = j < nvalid;
-        if (ok) {
-            double rmax2 = 0.0, rmin2 = HUGE_VAL; /* no fmax/fmin: libm calls */
-            for (int k = 0; k < 3; ++k) x[k] = pts[3 * j + k] * P->inv_scale;
-            for (int i = 0; i < P->n; ++i) {
-                const double d[3] = {P->vd[i][0] - x[0], P->vd[i][1] - x[1], P->vd[i][2] - x[2]};
-                const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                rmax2 = d2 > rmax2 ? d2 : rmax2;
-                rmin2 = d2 < rmin2 ? d2 : rmin2;
-            }
-            h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
-                P->normal[2] * (P->vd[0][2] - x[2]);
-            ok = h * h > tol * tol * rmax2 * P->len2 && rmin2 >= 0x1p-100 && rmax2 <= 0x1p80;
-            for (int k = 0; k < 3; ++k) x[k] -= P->vd[0][k]; /* relative to v_0, as P->v (float range) */
+    const double tol = 8.0 * DBL_EPSILON, pp = P->perimeter * P->perimeter * 0x1p10;
+    const double hp = -(P->normal[0] * P->proxy[0] + P->normal[1] * P->proxy[1] + P->normal[2] * P->proxy[2]);
+    int count = 0;
+    for (int j0 = 0; j0 < VL; j0 += VD) {
+        vdl x[3], lane;
+        for (int j = 0; j < VD; ++j) { /* lanes past nvalid repeat point 0 (finite; masked below) */
+            const float *pt = pts + 3 * (j0 + j < nvalid ? j0 + j : 0);
+            for (int k = 0; k < 3; ++k) x[k][j] = pt[k] * P->inv_scale;
+            lane[j] = j0 + j;
         }
-        if (!ok) {
-            memcpy(x, P->proxy, sizeof x);
-            h = -(P->normal[0] * x[0] + P->normal[1] * x[1] + P->normal[2] * x[2]);
+        vdl rmax2 = vdl_set1(0.0), rmin2 = vdl_set1(HUGE_VAL);
+        for (int i = 0; i < P->n; ++i) {
+            const vdl d0 = vdl_set1(P->vd[i][0]) - x[0], d1 = vdl_set1(P->vd[i][1]) - x[1];
+            const vdl d2 = vdl_set1(P->vd[i][2]) - x[2], r2 = d0 * d0 + d1 * d1 + d2 * d2;
+            rmax2 = vdl_sel(r2 > rmax2, r2, rmax2);
+            rmin2 = vdl_sel(r2 < rmin2, r2, rmin2);
         }
-        for (int k = 0; k < 3; ++k) w->lane[k * VL + j] = (float)x[k];
-        w->lane[3 * VL + j] = (float)h;
-        w->lane[4 * VL + j] = ok ? 1.0f : 0.0f;
+        const vdl h = vdl_set1(P->normal[0]) * (vdl_set1(P->vd[0][0]) - x[0]) +
+                      vdl_set1(P->normal[1]) * (vdl_set1(P->vd[0][1]) - x[1]) +
+                      vdl_set1(P->normal[2]) * (vdl_set1(P->vd[0][2]) - x[2]);
+        const vdl h2 = h * h;
+        const vml seen = (lane < vdl_set1(nvalid)) & (h2 > vdl_set1(tol * tol) * rmax2 * vdl_set1(P->len2)) &
+                         (rmax2 <= vdl_set1(0x1p80));
+        const vml ok = seen & (rmin2 >= vdl_set1(0x1p-100));
+        const vml unres = seen & ((h2 <= vdl_set1(0x1p-32) * rmax2 * vdl_set1(P->len2)) | (rmin2 < vdl_set1(0x1p-32)) |
+                                  (vdl_set1(pp) < rmin2) | (vdl_set1(P->perimeter) * rmax2 > vdl_set1(0x1p13) * vdl_abs(h)));
+        for (int k = 0; k < 3; ++k) /* relative to v_0, as P->v (float range) */
+            vdl_store_float(w->lane + k * VL + j0, vdl_sel(ok, x[k] - vdl_set1(P->vd[0][k]), vdl_set1(P->proxy[k])));
+        vdl_store_float(w->lane + 3 * VL + j0, vdl_sel(ok, h, vdl_set1(hp)));
+        vdl_store_float(w->lane + 4 * VL + j0, vdl_sel(ok, vdl_set1(1.0), vdl_set1(0.0)));
+        for (int j = 0; j < VD; ++j)
+            if (unres[j]) redo[count++] = p0 + j0 + j;
     }
+    return count;
 }
 
 /* Per-vertex and per-edge geometry of the block's points (cf. shl__poly_geom_init),
@@ -399,14 +436,67 @@ static ALWAYS_INLINE void lobes_zh(const shl__batch_poly *P, work_t *w, int lmax
         }
 }
 
-/* out[i * ostep] = sum_k wt[i * ncol + k] x[k * xstep] for rows i < nrow, four rows
- * at a time (independent FMA chains sharing the loads of x). */
-static void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_t xstep, float *out, ptrdiff_t ostep)
+/* out_q[i * ostep] = sum_k wt[i * ncol + k] x_q[k * xstep] for rows i < nrow and the
+ * nq quantities (x_q = x + q xq, out_q = out + q oq) that share the matrix.  An FMA
+ * has a latency of about 4 cycles and 2 issue per cycle: 8 independent chains keep
+ * both FMA units busy, so the rows go two at a time for the 4 quantities of the
+ * gradient batch (each x_q load serves both rows, each weight all 4 quantities);
+ * one quantity goes four rows at a time.  Every sum runs in k order from 0, so
+ * coefficients are the same bits with and without gradients. */
+static ALWAYS_INLINE void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_t xstep, ptrdiff_t xq,
+                                 float *out, ptrdiff_t ostep, ptrdiff_t oq, const int nq)
 {
+    const vf zero = vf_set1(0.0f);
     int i = 0;
+    if (nq == 4) {
+        for (; i + 2 <= nrow; i += 2) {
+            const float *w0 = wt + (size_t)i * ncol, *w1 = w0 + ncol;
+            vf a0 = zero, a1 = zero, a2 = zero, a3 = zero, b0 = zero, b1 = zero, b2 = zero, b3 = zero;
+            for (int k = 0; k < ncol; ++k) {
+                const float *xk = x + k * xstep;
+                const vf x0 = vf_load(xk), x1 = vf_load(xk + xq), x2 = vf_load(xk + 2 * xq), x3 = vf_load(xk + 3 * xq);
+                const vf u = vf_set1(w0[k]), v = vf_set1(w1[k]);
+                a0 = vf_fma(u, x0, a0);
+                a1 = vf_fma(u, x1, a1);
+                a2 = vf_fma(u, x2, a2);
+                a3 = vf_fma(u, x3, a3);
+                b0 = vf_fma(v, x0, b0);
+                b1 = vf_fma(v, x1, b1);
+                b2 = vf_fma(v, x2, b2);
+                b3 = vf_fma(v, x3, b3);
+            }
+            float *o = out + i * ostep;
+            vf_store(o, a0);
+            vf_store(o + oq, a1);
+            vf_store(o + 2 * oq, a2);
+            vf_store(o + 3 * oq, a3);
+            vf_store(o + ostep, b0);
+            vf_store(o + ostep + oq, b1);
+            vf_store(o + ostep + 2 * oq, b2);
+            vf_store(o + ostep + 3 * oq, b3);
+        }
+        for (; i < nrow; ++i) {
+            const float *w0 = wt + (size_t)i * ncol;
+            vf a0 = zero, a1 = zero, a2 = zero, a3 = zero;
+            for (int k = 0; k < ncol; ++k) {
+                const float *xk = x + k * xstep;
+                const vf u = vf_set1(w0[k]);
+                a0 = vf_fma(u, vf_load(xk), a0);
+                a1 = vf_fma(u, vf_load(xk + xq), a1);
+                a2 = vf_fma(u, vf_load(xk + 2 * xq), a2);
+                a3 = vf_fma(u, vf_load(xk + 3 * xq), a3);
+            }
+            float *o = out + i * ostep;
+            vf_store(o, a0);
+            vf_store(o + oq, a1);
+            vf_store(o + 2 * oq, a2);
+            vf_store(o + 3 * oq, a3);
+        }
+        return;
+    }
     for (; i + 4 <= nrow; i += 4) {
         const float *w0 = wt + (size_t)i * ncol;
-        vf a0 = vf_set1(0.0f), a1 = a0, a2 = a0, a3 = a0;
+        vf a0 = zero, a1 = zero, a2 = zero, a3 = zero;
         for (int k = 0; k < ncol; ++k) {
             const vf xk = vf_load(x + k * xstep);
             a0 = vf_fma(vf_set1(w0[k]), xk, a0);
@@ -420,25 +510,62 @@ static void matvec(const float *wt, int nrow, int ncol, const float *x, ptrdiff_
         vf_store(out + (i + 3) * ostep, a3);
     }
     for (; i < nrow; ++i) {
-        vf a0 = vf_set1(0.0f);
+        vf a0 = zero;
         for (int k = 0; k < ncol; ++k) a0 = vf_fma(vf_set1(wt[(size_t)i * ncol + k]), vf_load(x + k * xstep), a0);
         vf_store(out + i * ostep, a0);
     }
 }
 
+/* Rows i..i+3 of both matrices of band l, one quantity: the even ones (l + 1 columns,
+ * from u, to out + r VL) and the odd ones (l columns, from v, to out - (r + 1) VL),
+ * i + 4 <= l: 8 independent chains, each summed in k order from 0 as in matvec. */
+static ALWAYS_INLINE void matvec_pair4(const float *we, const float *wo, int l, int i, const float *u, const float *v,
+                                       ptrdiff_t xstep, float *out)
+{
+    const int ne = l + 1;
+    const float *e0 = we + (size_t)i * ne, *o0 = wo + (size_t)i * l;
+    vf a0 = vf_set1(0.0f), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
+    for (int k = 0; k < l; ++k) {
+        const vf xu = vf_load(u + k * xstep), xv = vf_load(v + k * xstep);
+        a0 = vf_fma(vf_set1(e0[k]), xu, a0);
+        a1 = vf_fma(vf_set1(e0[ne + k]), xu, a1);
+        a2 = vf_fma(vf_set1(e0[2 * ne + k]), xu, a2);
+        a3 = vf_fma(vf_set1(e0[3 * ne + k]), xu, a3);
+        b0 = vf_fma(vf_set1(o0[k]), xv, b0);
+        b1 = vf_fma(vf_set1(o0[l + k]), xv, b1);
+        b2 = vf_fma(vf_set1(o0[2 * l + k]), xv, b2);
+        b3 = vf_fma(vf_set1(o0[3 * l + k]), xv, b3);
+    }
+    const vf xu = vf_load(u + l * xstep);
+    float *oe = out + (ptrdiff_t)i * VL, *oo = out - (ptrdiff_t)(i + 1) * VL;
+    vf_store(oe, vf_fma(vf_set1(e0[l]), xu, a0));
+    vf_store(oe + VL, vf_fma(vf_set1(e0[ne + l]), xu, a1));
+    vf_store(oe + 2 * VL, vf_fma(vf_set1(e0[2 * ne + l]), xu, a2));
+    vf_store(oe + 3 * VL, vf_fma(vf_set1(e0[3 * ne + l]), xu, a3));
+    vf_store(oo, b0);
+    vf_store(oo - VL, b1);
+    vf_store(oo - 2 * VL, b2);
+    vf_store(oo - 3 * VL, b3);
+}
+
 /* The sparse ZH -> SH reconstruction (Wang 2018 Eq. 33, zh_tables.h) of every
- * band and quantity, from the paired sums u_k and differences v_k. */
-static void reconstruct(const work_t *w, int lmax, int nq)
+ * band and quantity, from the paired sums u_k and differences v_k (m = -1 .. -l
+ * from v_1 .. v_l).  One quantity: rows of the even and odd matrices four and four
+ * together (matvec_pair4), the rest through matvec. */
+static ALWAYS_INLINE void reconstruct(const work_t *w, int lmax, const int nq)
 {
     const int L = lmax + 1, nc = L * L;
-    for (int q = 0; q < nq; ++q)
-        for (int l = 0; l <= lmax; ++l) {
-            const float *u = w->u + ((size_t)q * L * L + l) * VL, *v = w->v + ((size_t)q * L * L + l) * VL;
-            float *out = w->soa + ((size_t)q * nc + l * (l + 1)) * VL;
-            matvec(shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, u, (ptrdiff_t)L * VL, out, VL);
-            if (l > 0) /* m = -1 .. -l, from v_1 .. v_l */
-                matvec(shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l), l, l, v + (size_t)L * VL, (ptrdiff_t)L * VL, out - VL, -VL);
-        }
+    const ptrdiff_t xs = (ptrdiff_t)L * VL, xq = (ptrdiff_t)L * L * VL, oq = (ptrdiff_t)nc * VL;
+    for (int l = 0; l <= lmax; ++l) {
+        const float *u = w->u + (size_t)l * VL, *v = w->v + (size_t)(L + l) * VL;
+        const float *we = shl__zh_even_w_f + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w_f + SHL__ZH_ODD_OFS(l);
+        float *out = w->soa + (size_t)l * (l + 1) * VL;
+        int i = 0;
+        if (nq == 1)
+            for (; i + 4 <= l; i += 4) matvec_pair4(we, wo, l, i, u, v, xs, out);
+        matvec(we + (size_t)i * (l + 1), l + 1 - i, l + 1, u, xs, xq, out + (ptrdiff_t)i * VL, VL, oq, nq);
+        if (l > i) matvec(wo + (size_t)i * l, l - i, l, v, xs, xq, out - (ptrdiff_t)(i + 1) * VL, -VL, oq, nq);
+    }
 }
 
 /* Rows soa[k] (one vector per row, lane j = point j) to out[j * stride + k], j < nvalid. */
@@ -450,9 +577,10 @@ static void store_rows(const float *soa, int nrows, float *out, size_t stride, i
         for (int j = 0; j < nvalid; ++j) out[j * stride + k] = soa[(size_t)k * VL + j];
 }
 
-static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
-                                          float *coeffs, float *grad, void *work, const int with_grad)
+static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
+                                         float *coeffs, float *grad, void *work, int *redo, const int with_grad)
 {
+    int nredo = 0;
     const int L = lmax + 1, nc = L * L, nq = with_grad ? 4 : 1;
     work_t w;
     work_floats(lmax, nq, &w, (float *)(((uintptr_t)work + 63) & ~(uintptr_t)63));
@@ -473,7 +601,7 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
     const float gs1 = (float)(P->inv_scale / gs0);
     for (int p0 = 0; p0 < npts; p0 += VL) {
         const int nvalid = npts - p0 < VL ? npts - p0 : VL;
-        lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w);
+        nredo += lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w, p0, redo + nredo);
         const vf omega = geometry(P, &w, with_grad);
         /* result = sign(S_0) * (input-order result); masked lanes get 0 */
         const vf fs = vf_mulsign(vf_load(w.lane + 4 * VL), omega);
@@ -481,19 +609,18 @@ static ALWAYS_INLINE void poly_batch_impl(const shl__batch_poly *P, int lmax, in
         lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad);
         for (int k = 1; k <= lmax; ++k) /* lobe pairs (2k-1, 2k), mirror images in y */
             lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad);
-        reconstruct(&w, lmax, nq);
+        reconstruct(&w, lmax, with_grad ? 4 : 1);
         for (size_t r = nc; gs1 != 1.0f && r < (size_t)nq * nc; ++r)
             vf_store(w.soa + r * VL, vf_mul(vf_load(w.soa + r * VL), vf_set1(gs1)));
         store_rows(w.soa, nc, coeffs + (size_t)p0 * nc, (size_t)nc, nvalid);
         if (with_grad) store_rows(w.soa + (size_t)nc * VL, 3 * nc, grad + (size_t)p0 * 3 * nc, 3 * (size_t)nc, nvalid);
     }
+    return nredo;
 }
 
-void ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs,
-                          float *grad, void *work)
+int ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs, float *grad,
+                         void *work, int *redo)
 {
-    if (grad)
-        poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, 1);
-    else
-        poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, 0);
+    if (grad) return poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, redo, 1);
+    return poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, redo, 0);
 }

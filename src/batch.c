@@ -5,8 +5,8 @@
  * (src/lights_batch.c) run the same two steps per polygon. */
 #include "parallel.h"
 #include "polygon.h"
-#include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 /* Repeated vertices dropped as in shl__poly_geom_init (polygon.c); P->n = 0
@@ -39,8 +39,12 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
     memcpy(P->normal, normal, sizeof normal);
     P->len2 = len2;
     double centroid[3] = {0.0, 0.0, 0.0};
+    P->perimeter = 0.0;
     for (int i = 0; i < m; ++i) {
         const int f = i + 1 == m ? 0 : i + 1;
+        double d[3];
+        for (int k = 0; k < 3; ++k) d[k] = P->vd[f][k] - P->vd[i][k];
+        P->perimeter += sqrt(shl__dot3(d, d));
         for (int k = 0; k < 3; ++k) {
             P->v[i][k] = (float)(P->vd[i][k] - P->vd[0][k]); /* relative to v_0: within float range */
             P->edge[i][k] = (float)(P->vd[f][k] - P->vd[i][k]);
@@ -59,43 +63,6 @@ void shl__batch_poly_prepare(const double *verts, int n, shl__batch_poly *P)
     P->n = m;
 }
 
-/* Points the all-float geometry cannot resolve: closer to the plane than 2^-16 of
- * their distance to the farthest vertex (the side, hence the sign of the gradient's
- * normal component, would be decided by float rounding), or within 2^-16 extents of
- * a vertex (float cannot separate them from it).  Not those of the kernel's own
- * cases: in the plane by the double test (zeros) or beyond 2^40 extents (zeros);
- * cf. lanes_setup in simd/poly_batch.h.  Distances in the scaled units of P.
- * Also the points where the float boundary sums cancel: the kernel's error is about
- * FLT_EPSILON sum_e gamma_e / omega of omega (cf. shl__poly_zh_f, polygon.c; measured
- * 2.5e-4 for a square 1e-3 rad across, where the ratio is 4e3).  With edge arcs
- * gamma_e ~ |edge_e| / r and omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the
- * ratio is about 2 perimeter r^2 / |h|, and at least 4 r / perimeter.  Two cases take
- * the scalar path, whose double recurrence keeps ~1e-7 of omega:
- *  - small lights, perimeter < r_min / 32 (a square under 1/128 rad: ratio > 2^9; the
- *    kernel's error above is <= 5e-5 of omega);
- *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
- *    there ~1e-3 of omega; the square (+-1, +-1, 0) seen from (3, 0.5, h): h < 2.2e-3).
- *    The band above, where the kernel keeps 3e-5..2e-4 of omega (there h = 1e-2..3e-3),
- *    stays on the kernel: routing it (ratio > 2^9) cost +23% in a room with a ceiling
- *    light (~5% of the points routed, each at ~5 kernel lanes' cost). */
-static int float_unresolved(const shl__batch_poly *P, double perimeter, const float *pt)
-{
-    double x[3], rmax2 = 0.0, rmin2 = HUGE_VAL;
-    for (int k = 0; k < 3; ++k) x[k] = pt[k] * P->inv_scale;
-    for (int i = 0; i < P->n; ++i) {
-        const double d[3] = {P->vd[i][0] - x[0], P->vd[i][1] - x[1], P->vd[i][2] - x[2]};
-        const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        rmax2 = d2 > rmax2 ? d2 : rmax2; /* finite input: no NaN, so no libm fmax/fmin calls */
-        rmin2 = d2 < rmin2 ? d2 : rmin2;
-    }
-    const double h = P->normal[0] * (P->vd[0][0] - x[0]) + P->normal[1] * (P->vd[0][1] - x[1]) +
-                     P->normal[2] * (P->vd[0][2] - x[2]);
-    const double h2 = h * h, tol = 8.0 * DBL_EPSILON, band = 0x1p-32 * rmax2 * P->len2;
-    return rmax2 <= 0x1p80 && h2 > tol * tol * rmax2 * P->len2 &&
-           (h2 <= band || rmin2 < 0x1p-32 || perimeter * perimeter * 0x1p10 < rmin2 ||
-            perimeter * rmax2 > 0x1p13 * fabs(h));
-}
-
 /* Such a point takes the scalar path of shl_polygon_grad_f (geometry in double). */
 void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const float *pt, float *coeffs, float *grad)
 {
@@ -110,6 +77,30 @@ void shl__batch_poly_point(const shl_ctx *ctx, const double *verts, int n, const
     shl__poly_grad_unscale_f(&g, grad, 3 * ctx->nc);
 }
 
+/* Points the all-float geometry cannot resolve: closer to the plane than 2^-16 of
+ * their distance to the farthest vertex (the side, hence the sign of the gradient's
+ * normal component, would be decided by float rounding), or within 2^-16 extents of
+ * a vertex (float cannot separate them from it).  Not those of the kernel's own
+ * cases: in the plane by the double test (zeros) or beyond 2^40 extents (zeros);
+ * the kernel tests them all, in double, in lanes_setup (simd/poly_batch.h):
+ * x scaled, rmax2 and rmin2 the largest and smallest squared distance to a vertex,
+ * h the plane distance times |N|:
+ *   rmax2 <= 2^80, h^2 > (8 DBL_EPSILON)^2 rmax2 |N|^2 (not the kernel's own cases), and
+ *   h^2 <= 2^-32 rmax2 |N|^2 or rmin2 < 2^-32 or perimeter^2 2^10 < rmin2 or
+ *   perimeter rmax2 > 2^13 |h|.  Distances in the scaled units of P.
+ * Also the points where the float boundary sums cancel: the kernel's error is about
+ * FLT_EPSILON sum_e gamma_e / omega of omega (cf. shl__poly_zh_f, polygon.c; measured
+ * 2.5e-4 for a square 1e-3 rad across, where the ratio is 4e3).  With edge arcs
+ * gamma_e ~ |edge_e| / r and omega ~ area |h_n| / r^3 (h_n = h / |N|, |N| = 2 area) the
+ * ratio is about 2 perimeter r^2 / |h|, and at least 4 r / perimeter.  Two cases take
+ * the scalar path, whose double recurrence keeps ~1e-7 of omega:
+ *  - small lights, perimeter < r_min / 32 (a square under 1/128 rad: ratio > 2^9; the
+ *    kernel's error above is <= 5e-5 of omega);
+ *  - points so close to a light's plane that the ratio exceeds 2^14 (kernel error
+ *    there ~1e-3 of omega; the square (+-1, +-1, 0) seen from (3, 0.5, h): h < 2.2e-3).
+ *    The band above, where the kernel keeps 3e-5..2e-4 of omega (there h = 1e-2..3e-3),
+ *    stays on the kernel: routing it (ratio > 2^9) cost +23% in a room with a ceiling
+ *    light (~5% of the points routed, each at ~5 kernel lanes' cost). */
 void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const double *verts, int n, int npts,
                           const float *pts, float *coeffs, float *grad, void *work)
 {
@@ -119,17 +110,17 @@ void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const do
         if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
         return;
     }
-    ctx->isa->poly_batch(P, ctx->lmax, npts, pts, coeffs, grad, work);
-    double perimeter = 0.0; /* scaled units */
-    for (int i = 0; i < P->n; ++i) {
-        const int f = i + 1 == P->n ? 0 : i + 1;
-        double d[3];
-        for (int k = 0; k < 3; ++k) d[k] = P->vd[f][k] - P->vd[i][k];
-        perimeter += sqrt(shl__dot3(d, d));
+    int redo[SHL__BATCH_BLOCK];
+    for (int p0 = 0; p0 < npts; p0 += SHL__BATCH_BLOCK) {
+        const int m = npts - p0 < SHL__BATCH_BLOCK ? npts - p0 : SHL__BATCH_BLOCK;
+        const float *x = pts + 3 * (size_t)p0;
+        float *c = coeffs + nc * p0, *g = grad ? grad + 3 * nc * p0 : NULL;
+        const int nredo = ctx->isa->poly_batch(P, ctx->lmax, m, x, c, g, work, redo);
+        for (int r = 0; r < nredo; ++r) {
+            const size_t p = (size_t)redo[r];
+            shl__batch_poly_point(ctx, verts, n, x + 3 * p, c + nc * p, g ? g + 3 * nc * p : NULL);
+        }
     }
-    for (int p = 0; p < npts; ++p)
-        if (float_unresolved(P, perimeter, pts + 3 * (size_t)p))
-            shl__batch_poly_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
 }
 
 typedef struct {
@@ -168,15 +159,27 @@ static void poly_eval(const shl_ctx *ctx, const void *light, int npts, const flo
     shl__batch_poly_eval(ctx, L->P, L->verts, L->n, npts, pts, coeffs, grad, work);
 }
 
+/* Nonzero when one of the count floats is infinite or NaN (all exponent bits
+ * set): one pass without an early exit, which the compiler vectorizes (the
+ * per-point shl__check_finite_f calls were 3% of the batch's time at lmax 8). */
+static int any_nonfinite_f(const float *v, size_t count)
+{
+    uint32_t bad = 0;
+    for (size_t i = 0; i < count; ++i) {
+        uint32_t u;
+        memcpy(&u, v + i, sizeof u);
+        bad |= (u & 0x7f800000u) == 0x7f800000u;
+    }
+    return bad != 0;
+}
+
 int shl_polygon_batch_f_mt(const shl_ctx *ctx, const float *verts, int n, int npts, const float *pts, float *coeffs,
                            float *grad, int nthreads)
 {
     if (!ctx || !verts || (npts > 0 && (!pts || !coeffs))) return SHL_ENULL;
     if (n < 3 || n > SHL_MAX_VERTS) return SHL_ENVERTS;
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
-    if (shl__check_finite_f(verts, 3 * n)) return SHL_ENONFINITE;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (shl__check_finite_f(verts, 3 * n) || any_nonfinite_f(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
     double vd[3 * SHL_MAX_VERTS];
     for (int i = 0; i < 3 * n; ++i) vd[i] = verts[i];
