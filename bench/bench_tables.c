@@ -161,7 +161,7 @@ static double raster_time(prt *p, int reps)
     double best = INFINITY;
     for (int r = 0; r < reps; ++r) {
         const double t0 = bench_now();
-        if (raster_draw(&p->fb, &p->cam, p->rm, 3, nthreads)) exit(1);
+        if (raster_draw(&p->fb, &p->cam, p->rdraw, 3, nthreads)) exit(1);
         best = fmin(best, bench_now() - t0);
     }
     return best;
