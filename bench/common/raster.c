@@ -329,14 +329,21 @@ static void tile_job(void *arg, int worker, long begin, long end)
         for (long i = c->tile_first[tile]; i < c->tile_first[tile + 1]; ++i) {
             const rtri *r = c->tile_list[i];
             const double area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
-            double ex[3], ey[3], e0[3];
+            double ax[3], ay[3], ex[3], ey[3], sg[3];
             int bias[3];
             for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
                 const int a = (k + 1) % 3, b = (k + 2) % 3;
                 const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
-                ex[k] = -dy;
-                ey[k] = dx;
-                e0[k] = dy * r->x[a] - dx * r->y[a];
+                /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
+                 * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
+                 * products and get exactly opposite values, so no pixel centre falls between them */
+                const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
+                const int lo = fwd ? a : b, hi = fwd ? b : a;
+                ax[k] = r->x[lo];
+                ay[k] = r->y[lo];
+                ex[k] = r->x[hi] - r->x[lo];
+                ey[k] = r->y[hi] - r->y[lo];
+                sg[k] = fwd ? -1.0 : 1.0;
                 bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
             }
             const int x0 = r->x0 > tx0 ? r->x0 : tx0, x1 = r->x1 < tx1 ? r->x1 : tx1;
@@ -347,7 +354,7 @@ static void tile_job(void *arg, int worker, long begin, long end)
                     double l[3];
                     int inside = 1;
                     for (int k = 0; k < 3 && inside; ++k) {
-                        l[k] = ex[k] * px + ey[k] * py + e0[k];
+                        l[k] = sg[k] * ((px - ax[k]) * ey[k] - (py - ay[k]) * ex[k]);
                         inside = l[k] > 0 || (l[k] == 0 && bias[k]);
                     }
                     if (!inside) continue;
