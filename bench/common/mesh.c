@@ -292,12 +292,13 @@ fail:
     return -1;
 }
 
-/* x's 10-bit coordinate q spread to bits 0, 3, 6, ... (Morton interleave). */
+/* A 10-bit coordinate q spread to bits 0, 3, 6, ... (Morton interleave). */
 static uint64_t spread3(uint64_t q)
 {
-    uint64_t r = 0;
-    for (int b = 0; b < 10; ++b) r |= (q >> b & 1) << (3 * b);
-    return r;
+    q = (q | q << 16) & 0x030000FFu;
+    q = (q | q << 8) & 0x0300F00Fu;
+    q = (q | q << 4) & 0x030C30C3u;
+    return (q | q << 2) & 0x09249249u;
 }
 
 int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, int *nv)

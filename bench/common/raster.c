@@ -77,7 +77,7 @@ typedef struct {
     int keyed;        /* the frame fits the keys' shorts */
     int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
     long maxlist;     /* longest tile list */
-    void *sort_buf;   /* per worker: 4 maxlist words */
+    void *sort_buf;   /* per worker: 4 maxlist words (sort_list), then maxlist records (the tile's, in order) */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
     long *chunk_count; /* their number */
@@ -320,14 +320,18 @@ static void tile_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     framebuf *fb = c->fb;
+    uint64_t *buf = (uint64_t *)c->sort_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
+    rtri *local = (rtri *)(buf + 4 * (size_t)c->maxlist);
     for (long tile = begin; tile < end; ++tile) {
-        if (c->sort)
-            sort_list(c, c->tile_list + c->tile_first[tile], c->tile_first[tile + 1] - c->tile_first[tile],
-                      (uint64_t *)c->sort_buf + 4 * (size_t)c->maxlist * (size_t)worker);
+        const rtri **list = c->tile_list + c->tile_first[tile];
+        const long n = c->tile_first[tile + 1] - c->tile_first[tile];
+        if (c->sort) sort_list(c, list, n, buf);
+        /* the tile's records gathered first: independent loads, many misses in flight */
+        for (long i = 0; i < n; ++i) local[i] = *list[i];
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
-        for (long i = c->tile_first[tile]; i < c->tile_first[tile + 1]; ++i) {
-            const rtri *r = c->tile_list[i];
+        for (long i = 0; i < n; ++i) {
+            const rtri *r = &local[i];
             const double area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
             double ax[3], ay[3], ex[3], ey[3], sg[3];
             int bias[3];
@@ -456,7 +460,7 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
     for (int t = 0; t < ntiles; ++t)
         c.maxlist = c.tile_first[t + 1] - c.tile_first[t] > c.maxlist ? c.tile_first[t + 1] - c.tile_first[t] : c.maxlist;
-    if (c.sort && !(c.sort_buf = work(fb, 4, sizeof(uint64_t) * 4 * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
+    if (!(c.sort_buf = work(fb, 4, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
