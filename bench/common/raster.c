@@ -77,7 +77,7 @@ typedef struct {
     int keyed;        /* the frame fits the keys' shorts */
     int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
     long maxlist;     /* longest tile list */
-    void *sort_buf;   /* per worker: 4 maxlist words (sort_list), then maxlist records (the tile's, in order) */
+    void *tile_buf;   /* per worker: 4 maxlist words (sort_list), then maxlist records (a tile's, in order) */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
     long *chunk_count; /* their number */
@@ -254,9 +254,9 @@ static void setup_job(void *arg, int worker, long begin, long end)
             while (g >= c->first_tri[m + 1]) ++m;
             const int *tv = c->meshes[m].tri + 3 * (size_t)(g - c->first_tri[m]);
             const pkey *k = c->key + c->first_vert[m], *a = &k[tv[0]], *b = &k[tv[1]], *d = &k[tv[2]];
-            const int maxfx = a->fx > b->fx ? a->fx : b->fx, minc = a->cx < b->cx ? a->cx : b->cx;
+            const int maxfx = a->fx > b->fx ? a->fx : b->fx, mincx = a->cx < b->cx ? a->cx : b->cx;
             const int maxfy = a->fy > b->fy ? a->fy : b->fy, mincy = a->cy < b->cy ? a->cy : b->cy;
-            const int empty = (maxfx > d->fx ? maxfx : d->fx) < (minc < d->cx ? minc : d->cx) ||
+            const int empty = (maxfx > d->fx ? maxfx : d->fx) < (mincx < d->cx ? mincx : d->cx) ||
                               (maxfy > d->fy ? maxfy : d->fy) < (mincy < d->cy ? mincy : d->cy);
             cand[nc] = g;
             nc += !empty;
@@ -292,7 +292,6 @@ static void bin_job(void *arg, int worker, long begin, long end)
         }
 }
 
-/* Rasterize the records binned to one tile, in record order (deterministic ties). */
 /* Sort list[0 .. n) by (mesh, tri, fan), i.e. into the order the unreordered meshes give: LSD
  * radix sort on 11-bit digits of the key (first_tri[mesh] + tri) * 2 + fan, buf: 4 n words. */
 static void sort_list(const ctx_t *c, const rtri **list, long n, void *buf)
@@ -316,11 +315,13 @@ static void sort_list(const ctx_t *c, const rtri **list, long n, void *buf)
     if (from) memcpy(list, ptr[1], sizeof(rtri *) * (size_t)n);
 }
 
+/* Rasterize the records binned to one tile in the order of the unreordered meshes' triangles
+ * (the z-buffer keeps the first of equal depths: deterministic ties). */
 static void tile_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     framebuf *fb = c->fb;
-    uint64_t *buf = (uint64_t *)c->sort_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
+    uint64_t *buf = (uint64_t *)c->tile_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
     rtri *local = (rtri *)(buf + 4 * (size_t)c->maxlist);
     for (long tile = begin; tile < end; ++tile) {
         const rtri **list = c->tile_list + c->tile_first[tile];
@@ -460,7 +461,7 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
     for (int t = 0; t < ntiles; ++t)
         c.maxlist = c.tile_first[t + 1] - c.tile_first[t] > c.maxlist ? c.tile_first[t + 1] - c.tile_first[t] : c.maxlist;
-    if (!(c.sort_buf = work(fb, 4, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
+    if (!(c.tile_buf = work(fb, 4, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
