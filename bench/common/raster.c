@@ -201,8 +201,10 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
             miny = sy[id[k]] < miny ? sy[id[k]] : miny;
             maxy = sy[id[k]] > maxy ? sy[id[k]] : maxy;
         }
-        const double x0 = fmax(0.0, ceil(minx - 0.5)), x1 = fmin((double)c->w, floor(maxx - 0.5) + 1.0);
-        const double y0 = fmax(0.0, ceil(miny - 0.5)), y1 = fmin((double)c->h, floor(maxy - 0.5) + 1.0);
+        /* as fmax(0, .) and fmin(w, .), NaN included, without the library calls */
+        const double cx = ceil(minx - 0.5), fx = floor(maxx - 0.5) + 1.0, cy = ceil(miny - 0.5), fy = floor(maxy - 0.5) + 1.0;
+        const double x0 = cx > 0.0 ? cx : 0.0, x1 = fx < c->w ? fx : (double)c->w;
+        const double y0 = cy > 0.0 ? cy : 0.0, y1 = fy < c->h ? fy : (double)c->h;
         if (x0 >= x1 || y0 >= y1) continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
         if (area == 0.0) continue;
