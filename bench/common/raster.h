@@ -2,7 +2,10 @@
  * multi-threaded 32x32 tiles.  raster_draw computes a visibility buffer
  * (mesh, triangle and perspective-correct barycentrics per pixel centre);
  * raster_resolve then interpolates any per-vertex colours through it, so one
- * visibility pass serves every lighting method compared on a scene. */
+ * visibility pass serves every lighting method compared on a scene.  A pixel is
+ * covered when its centre is inside the triangle; a centre on an edge goes to
+ * exactly one of the edge's two triangles (watertight: the two evaluate the edge
+ * function with the same operands and get exactly opposite values). */
 #ifndef SHL_BENCH_RASTER_H
 #define SHL_BENCH_RASTER_H
 
