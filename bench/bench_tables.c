@@ -161,7 +161,7 @@ static double raster_time(prt *p, int reps)
     double best = INFINITY;
     for (int r = 0; r < reps; ++r) {
         const double t0 = bench_now();
-        if (raster_draw(&p->fb, &p->cam, p->rm, 3, nthreads)) exit(1);
+        if (raster_draw(&p->fb, &p->cam, p->rdraw, 3, nthreads)) exit(1);
         best = fmin(best, bench_now() - t0);
     }
     return best;
@@ -266,43 +266,54 @@ typedef struct {
     const shl_ctx *ctx;
     const shl_lights *lights;
     int nc;
-    const double *pts;
-    double *out;
+    const float *pts;
+    float *out, *grad; /* grad NULL: coefficients only */
+    int failed;
 } nodes_job;
 
 static void nodes_block(void *arg, int worker, long begin, long end)
 {
     (void)worker;
-    const nodes_job *j = arg;
-    if (shl_lights_eval_batch(j->ctx, j->lights, (int)(end - begin), j->pts + 3 * begin, j->out + 3 * j->nc * begin, NULL) != SHL_OK)
-        exit(1);
+    nodes_job *j = arg;
+    float *grad = j->grad ? j->grad + 9 * (size_t)j->nc * (size_t)begin : NULL;
+    if (shl_lights_eval_batch_f(j->ctx, j->lights, (int)(end - begin), j->pts + 3 * begin,
+                                j->out + 3 * (size_t)j->nc * (size_t)begin, grad) != SHL_OK)
+        j->failed = 1;
 }
 
-/* Coefficients only (no gradients) at the res^3 grid nodes over the receiver box: best of reps. */
-static double node_coeffs_time(const prt *p, int res, int reps)
+/* The res^3 grid nodes over the receiver box, rounded to float, through the path shl_grid_fill
+ * takes for float grids (shl_lights_eval_batch_f in blocks of 64 nodes, nthreads workers):
+ * *coeff without gradients, *grad with them (best of reps each), so that grad / coeff is the
+ * gradients' cost alone, as the paper's "eval coeff & grad / eval coeff". */
+static void node_eval_times(const prt *p, int res, int reps, double *coeff, double *grad)
 {
     const long n = (long)res * res * res;
     const int nc = SHL_NCOEFFS(p->s->lmax);
-    double *pts = xmalloc(sizeof(double) * 3 * (size_t)n), *out = xmalloc(sizeof(double) * 3 * (size_t)nc * (size_t)n);
+    float *pts = xmalloc(sizeof(float) * 3 * (size_t)n), *out = xmalloc(sizeof(float) * 3 * (size_t)nc * (size_t)n);
+    float *g = xmalloc(sizeof(float) * 9 * (size_t)nc * (size_t)n);
     for (long i = 0; i < n; ++i) {
         const long ijk[3] = {i % res, i / res % res, i / res / res};
-        for (int a = 0; a < 3; ++a) pts[3 * i + a] = p->lo[a] + (p->hi[a] - p->lo[a]) * (double)ijk[a] / (res - 1);
+        for (int a = 0; a < 3; ++a) pts[3 * i + a] = (float)(p->lo[a] + (p->hi[a] - p->lo[a]) * (double)ijk[a] / (res - 1));
     }
     shl_ctx *ctx;
     shl_lights *l = scene_light_set(p->s);
     if (!l || shl_ctx_create(p->s->lmax, &ctx) != SHL_OK) exit(1);
-    nodes_job j = {ctx, l, nc, pts, out};
-    double best = INFINITY;
-    for (int r = 0; r < reps; ++r) {
-        const double t0 = bench_now();
-        par_for(n, 8, nthreads, nodes_block, &j);
-        best = fmin(best, bench_now() - t0);
+    for (int withg = 0; withg < 2; ++withg) {
+        nodes_job j = {ctx, l, nc, pts, out, withg ? g : NULL, 0};
+        double best = INFINITY;
+        for (int r = 0; r < reps; ++r) {
+            const double t0 = bench_now();
+            par_for(n, 64, nthreads, nodes_block, &j);
+            best = fmin(best, bench_now() - t0);
+        }
+        if (j.failed) exit(1);
+        *(withg ? grad : coeff) = best;
     }
     shl_ctx_destroy(ctx);
     shl_lights_destroy(l);
     free(pts);
     free(out);
-    return best;
+    free(g);
 }
 
 /* Lights whose bounding box meets the closed grid box [lo, hi] (the receivers' bounding box).
@@ -411,8 +422,11 @@ static void section_wu(void)
                 "outside the grid's box as in the paper (column \"in box\": lights whose bounding box meets it; the\n"
                 "paper's Fig. 12 case has its own table below).  Dragon & Bunny and Buddha are glossy (Phong) with the\n"
                 "lighting at lmax 4 as the paper's Figs. 1 and 11 (Sec. 7.2); the others diffuse at lmax 8.  Unshadowed\n"
-                "transfer, 800x600, %d threads, float grid nodes.  Eval coeff: coefficients only at the 512 nodes\n"
-                "(shl_lights_eval_batch); eval coeff & grad: shl_grid_fill; grad/coeff: their ratio; interp: Hermite\n"
+                "transfer, 800x600, %d threads, float grid nodes.  Eval coeff and eval coeff & grad: the scene's lights\n"
+                "at the 512 nodes (rounded to float) through the path shl_grid_fill takes for float grids,\n"
+                "shl_lights_eval_batch_f in blocks of 64 nodes, without and with gradients; grad/coeff: their ratio\n"
+                "(the gradients' cost alone, as the paper's); fill: shl_grid_fill itself (nodes with gradients and\n"
+                "the grid's stores), the time the total counts; interp: Hermite\n"
                 "at every vertex (shl_grid_interp); total adds shading (transfer dot products, glossy lobes), the\n"
                 "visibility raster and resolving the image (interp and shading run fused per block of 64 vertices,\n"
                 "their wall time split by the workers' time in each).  Reference: per-vertex analytic shading (Wang 2018) by the\n"
@@ -422,8 +436,8 @@ static void section_wu(void)
                 "[0,1] units (x1e-3, as the paper) and linear relative.  Times: best of 3 (reference: 1 run).\n\n",
             nthreads);
     fprintf(md, "| scene (stand-in) | triangles | vertices | lights | in box | lmax | grid | eval coeff ms | eval coeff & grad ms | "
-                "grad/coeff | interp ms | shade + raster ms | total ms | FPS | MAE x1e-3 | rel. MAE | reference ms | speed-up |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "grad/coeff | fill ms | interp ms | shade + raster ms | total ms | FPS | MAE x1e-3 | rel. MAE | reference ms | speed-up |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     FILE *csv = NULL;
     for (unsigned r = 0; r < sizeof wu_rows / sizeof wu_rows[0]; ++r) {
         const wu_row *w = &wu_rows[r];
@@ -432,28 +446,30 @@ static void section_wu(void)
         if (load_scene(w->file, NULL, &s)) continue;
         if (!csv)
             csv = csv_open("wu2020_table1.csv", "scene,triangles,vertices,lights,lights_in_grid_box,lmax,grid,eval_coeff_ms,"
-                                                "eval_coeff_grad_ms,interp_ms,shade_raster_ms,total_ms,fps,mae_srgb_1e3,rel_mae,"
+                                                "eval_coeff_grad_ms,fill_ms,interp_ms,shade_raster_ms,total_ms,fps,mae_srgb_1e3,rel_mae,"
                                                 "reference_ms,speedup");
         prt p;
         init_prt(&p, &s);
         float *img = xmalloc(sizeof(float) * img_len(&s));
         const lighting_method m = grid(s.lmax, 8, SHL_INTERP_HERMITE);
         const prt_times t = render(&p, &m, NULL, 0, img, 3);
-        const double coeff = node_coeffs_time(&p, 8, 3), raster = raster_time(&p, 3);
+        double coeff, coeff_grad;
+        node_eval_times(&p, 8, 3, &coeff, &coeff_grad);
+        const double raster = raster_time(&p, 3);
         double ref_s;
         long nvis;
         float *ref = reference(&p, s.lmax, &ref_s, &nvis);
         const image_error e = image_compare(s.width, s.height, img, ref, p.mask, prt_exposure(&p, ref));
         const double rest = t.shade + raster + t.resolve, total = t.prepare + t.lighting + rest;
         const int inside = lights_in_grid_box(&p);
-        fprintf(md, "| %s | %d | %d | %d | %d | %d | 8^3 | %.1f | %.1f | %.2f | %.1f | %.1f | %.1f | %.2f | %.2f | %.2e | %.3g | %.1fx |\n",
-                w->scene, s.geom.nt, s.geom.nv, s.npolys, inside, s.lmax, coeff * 1e3, t.prepare * 1e3, t.prepare / coeff,
-                t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total, e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3,
+        fprintf(md, "| %s | %d | %d | %d | %d | %d | 8^3 | %.1f | %.1f | %.2f | %.1f | %.1f | %.1f | %.1f | %.2f | %.2f | %.2e | %.3g | %.1fx |\n",
+                w->scene, s.geom.nt, s.geom.nv, s.npolys, inside, s.lmax, coeff * 1e3, coeff_grad * 1e3, coeff_grad / coeff,
+                t.prepare * 1e3, t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total, e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3,
                 ref_s / total);
         csv_text(csv, w->scene);
-        fprintf(csv, ",%d,%d,%d,%d,%d,8,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4e,%.4f,%.3f\n", s.geom.nt, s.geom.nv, s.npolys,
-                inside, s.lmax, coeff * 1e3, t.prepare * 1e3, t.lighting * 1e3, rest * 1e3, total * 1e3, 1.0 / total,
-                e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3, ref_s / total);
+        fprintf(csv, ",%d,%d,%d,%d,%d,8,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4e,%.4f,%.3f\n", s.geom.nt, s.geom.nv,
+                s.npolys, inside, s.lmax, coeff * 1e3, coeff_grad * 1e3, t.prepare * 1e3, t.lighting * 1e3, rest * 1e3,
+                total * 1e3, 1.0 / total, e.mae_srgb * 1e3, e.mae / e.mean_ref, ref_s * 1e3, ref_s / total);
         fflush(md);
         free(img);
         free(ref);

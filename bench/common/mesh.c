@@ -292,6 +292,64 @@ fail:
     return -1;
 }
 
+/* A 10-bit coordinate q spread to bits 0, 3, 6, ... (Morton interleave). */
+static uint64_t spread3(uint64_t q)
+{
+    q = (q | q << 16) & 0x030000FFu;
+    q = (q | q << 8) & 0x0300F00Fu;
+    q = (q | q << 4) & 0x030C30C3u;
+    return (q | q << 2) & 0x09249249u;
+}
+
+int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, int *nv)
+{
+    double lo[3], hi[3];
+    mesh_bounds(m, lo, hi);
+    kv *order = malloc(sizeof *order * ((size_t)m->nt + 1));
+    int *id = malloc(sizeof(int) * ((size_t)m->nv + 1));
+    *pos = malloc(sizeof(double) * 3 * ((size_t)m->nv + 1));
+    *tri = malloc(sizeof(int) * 3 * ((size_t)m->nt + 1));
+    *tri_id = malloc(sizeof(int) * ((size_t)m->nt + 1));
+    if (!order || !id || !*pos || !*tri || !*tri_id) goto fail;
+    for (int t = 0; t < m->nt; ++t) {
+        uint64_t code = 0;
+        for (int a = 0; a < 3; ++a) {
+            const int *v = m->tri + 3 * (size_t)t;
+            const double c = (m->pos[3 * v[0] + a] + m->pos[3 * v[1] + a] + m->pos[3 * v[2] + a]) / 3.0;
+            const double u = hi[a] > lo[a] ? (c - lo[a]) / (hi[a] - lo[a]) * 1024.0 : 0.0;
+            code |= spread3(u < 0.0 ? 0 : u >= 1023.0 ? 1023 : (uint64_t)u) << a;
+        }
+        order[t] = (kv){code, t};
+    }
+    if (radix_sort(order, (size_t)m->nt)) goto fail;
+    for (int v = 0; v < m->nv; ++v) id[v] = -1;
+    *nv = 0;
+    for (int i = 0; i < m->nt; ++i) {
+        const int t = (int)order[i].ref;
+        (*tri_id)[i] = t;
+        for (int k = 0; k < 3; ++k) {
+            const int v = m->tri[3 * (size_t)t + k];
+            if (id[v] < 0) {
+                id[v] = (*nv)++;
+                memcpy(*pos + 3 * (size_t)id[v], m->pos + 3 * (size_t)v, sizeof(double) * 3);
+            }
+            (*tri)[3 * (size_t)i + k] = id[v];
+        }
+    }
+    free(order);
+    free(id);
+    return 0;
+fail:
+    free(order);
+    free(id);
+    free(*pos);
+    free(*tri);
+    free(*tri_id);
+    *pos = NULL;
+    *tri = *tri_id = NULL;
+    return -1;
+}
+
 int mesh_subdivide_to(mesh *m, long target)
 {
     while (4L * m->nt <= target)

@@ -36,6 +36,11 @@ void mesh_compute_normals(mesh *m);
  * they fit, then longest-edge bisection (conforming, +2 triangles per interior edge)
  * for the remainder.  Midpoints interpolate positions and normals linearly.  0 or -1. */
 int mesh_subdivide_to(mesh *m, long target);
+/* The mesh reordered for memory locality (what a renderer's index buffer does): triangles
+ * sorted by the Morton code of their centroid (10 bits per axis over the bounding box; ties in
+ * index order), vertices renumbered by first use.  Allocates *pos (3 *nv doubles), *tri (3 nt)
+ * and *tri_id (nt: each triangle's index in m, corners in m's order); 0 or -1. */
+int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, int *nv);
 /* dir/name as the oracle reads it (tools/oracle_images.py): positions, normals (3 nv doubles
  * each), the per-triangle albedo alb (3 nt doubles), triangles (3 nt ints); 0 or -1. */
 int mesh_write_oracle(const mesh *m, const double *alb, const char *dir, const char *name);

@@ -33,6 +33,10 @@ typedef struct {
     mesh emit[2];             /* display geometry of the lights: one-sided polygons; two-sided and spheres */
     float *emit_rgb[2];
     raster_mesh rm[3];        /* receivers, emit[0], emit[1] */
+    raster_mesh rdraw[3];     /* what raster_draw reads: rm with the receivers in locality order
+                                 (mesh_locality_order: the same visibility buffer, faster) */
+    double *rpos;             /* their positions, triangles and source triangles */
+    int *rtri, *rtri_id;
     framebuf fb;
     double raster_seconds;    /* the visibility raster of prt_init */
     unsigned char *mask;      /* pixels showing receivers */

@@ -1,6 +1,9 @@
 #include "raster.h"
 #include "parfor.h"
 #include "vec3.h"
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,7 +19,7 @@ int framebuf_init(framebuf *fb, int w, int h)
     fb->tri = malloc(sizeof(int) * n);
     fb->bary = malloc(sizeof(float) * 3 * n);
     fb->back = malloc(n);
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < 5; ++i) {
         fb->work[i] = NULL;
         fb->work_len[i] = 0;
     }
@@ -32,7 +35,7 @@ void framebuf_free(framebuf *fb)
     free(fb->tri);
     free(fb->bary);
     free(fb->back);
-    for (int i = 0; i < 4; ++i) free(fb->work[i]);
+    for (int i = 0; i < 5; ++i) free(fb->work[i]);
     memset(fb, 0, sizeof *fb);
 }
 
@@ -42,14 +45,25 @@ typedef struct {
     double x[3], y[3];
     float iw[3], b[3][3];
     int x0, y0, x1, y1; /* pixel centres x0 <= x < x1, y0 <= y < y1 */
-    int mesh, tri;
-    unsigned char back;
+    int mesh, tri;       /* tri: as fb->tri reports it (raster_mesh.tri_id) */
+    unsigned char back, fan; /* fan: which record of a clipped triangle */
 } rtri;
 
 /* A vertex seen by the camera: screen position (valid when z >= znear) and view depth. */
 typedef struct {
     double sx, sy, z;
 } pvert;
+
+/* A vertex's pixel-centre key: cx = ceil(sx - 0.5) clamped to [0, w], fx = floor(sx - 0.5)
+ * clamped to [-1, w - 1], cy and fy likewise.  ceil and floor commute with min and max, so a
+ * triangle wholly in front of the near plane has no pixel centre in its bounding box (setup_tri's
+ * x0 >= x1 or y0 >= y1, which the clamps preserve) exactly when max fx < min cx or max fy < min cy:
+ * setup_job rejects most triangles of a dense mesh (smaller than a pixel) from these 8 bytes per
+ * corner instead of the 24 of pvert.  A vertex behind the near plane (or not finite) gets a key
+ * that never rejects. */
+typedef struct {
+    short cx, fx, cy, fy;
+} pkey;
 
 typedef struct {
     const camera *cam;
@@ -59,14 +73,21 @@ typedef struct {
     long *first_tri;  /* prefix of the meshes' triangle counts (global triangle index) */
     long *first_vert; /* prefix of the meshes' vertex counts (index into pv) */
     pvert *pv;        /* every mesh's vertices, projected once per draw */
-    long nchunks;
-    rtri **chunk_recs; /* per chunk of CHUNK global triangles: its records, in triangle order */
-    long *chunk_count; /* their number, then the prefix sum */
+    pkey *key;        /* their pixel-centre keys */
+    int keyed;        /* the frame fits the keys' shorts */
+    int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
+    long maxlist;     /* longest tile list */
+    void *tile_buf;   /* per worker: 4 maxlist words (sort_list), then maxlist records (a tile's, in order) */
+    long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
+    rtri **chunk_recs; /* per chunk: its records, in triangle order */
+    long *chunk_count; /* their number */
+    long *bin;         /* per group and tile: its records' references to the tile, then where they go */
     rtri *scratch;     /* per worker: 2 CHUNK records */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
-    rtri *recs;
-    long nrecs;
-    int *tile_first, *tile_list, tiles_x, tiles_y;
+    long *cand;        /* per worker: CHUNK triangles the keys do not reject */
+    long *tile_first;
+    const rtri **tile_list;
+    int tiles_x, tiles_y, ntiles;
     framebuf *fb;
 } ctx_t;
 
@@ -85,6 +106,23 @@ static void view_space(const ctx_t *c, const double *x, double v[3])
 static double screen_x(const ctx_t *c, const double v[3]) { return 0.5 * c->w + c->focal * v[0] / v[2]; }
 static double screen_y(const ctx_t *c, const double v[3]) { return 0.5 * c->h - c->focal * v[1] / v[2]; }
 
+/* ceil(s - 0.5) clamped to [0, n] and floor(s - 0.5) clamped to [-1, n - 1] (s finite), by
+ * truncation where it is exact (0 <= t < n). */
+static short key_ceil(double s, int n)
+{
+    const double t = s - 0.5;
+    if (t <= 0.0) return 0;
+    if (t > n - 1) return (short)n;
+    const int k = (int)t;
+    return (short)(k + (t > k));
+}
+
+static short key_floor(double s, int n)
+{
+    const double t = s - 0.5;
+    return (short)(t < 0.0 ? -1 : t >= n ? n - 1 : (int)t);
+}
+
 static void project_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
@@ -95,9 +133,14 @@ static void project_job(void *arg, int worker, long begin, long end)
         double v[3];
         view_space(c, c->meshes[m].pos + 3 * (g - c->first_vert[m]), v);
         pvert *q = &c->pv[g];
+        pkey *k = &c->key[g];
         q->z = v[2];
         q->sx = v[2] >= c->znear ? screen_x(c, v) : 0.0;
         q->sy = v[2] >= c->znear ? screen_y(c, v) : 0.0;
+        if (c->keyed && v[2] >= c->znear && isfinite(q->sx) && isfinite(q->sy))
+            *k = (pkey){key_ceil(q->sx, c->w), key_floor(q->sx, c->w), key_ceil(q->sy, c->h), key_floor(q->sy, c->h)};
+        else
+            *k = (pkey){SHRT_MIN, SHRT_MAX, SHRT_MIN, SHRT_MAX};
     }
 }
 
@@ -158,8 +201,10 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
             miny = sy[id[k]] < miny ? sy[id[k]] : miny;
             maxy = sy[id[k]] > maxy ? sy[id[k]] : maxy;
         }
-        const double x0 = fmax(0.0, ceil(minx - 0.5)), x1 = fmin((double)c->w, floor(maxx - 0.5) + 1.0);
-        const double y0 = fmax(0.0, ceil(miny - 0.5)), y1 = fmin((double)c->h, floor(maxy - 0.5) + 1.0);
+        /* as fmax(0, .) and fmin(w, .), NaN included, without the library calls */
+        const double cx = ceil(minx - 0.5), fx = floor(maxx - 0.5) + 1.0, cy = ceil(miny - 0.5), fy = floor(maxy - 0.5) + 1.0;
+        const double x0 = cx > 0.0 ? cx : 0.0, x1 = fx < c->w ? fx : (double)c->w;
+        const double y0 = cy > 0.0 ? cy : 0.0, y1 = fy < c->h ? fy : (double)c->h;
         if (x0 >= x1 || y0 >= y1) continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
         if (area == 0.0) continue;
@@ -178,72 +223,134 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
             r->y0 = (int)y0;
             r->y1 = (int)y1;
             r->mesh = m;
-            r->tri = t;
+            r->tri = rm->tri_id ? rm->tri_id[t] : t;
             r->back = !swap;
+            r->fan = (unsigned char)emitted;
         }
         ++emitted;
     }
     return emitted;
 }
 
-static void global_to_local(const ctx_t *c, long g, int *m, int *t)
-{
-    int k = 0;
-    while (g >= c->first_tri[k + 1]) ++k;
-    *m = k;
-    *t = (int)(g - c->first_tri[k]);
-}
+/* tile: each tile the record's pixel box [x0, x1) x [y0, y1) meets, row by row. */
+#define FOR_TILES(c, r, tile) \
+    for (int ty_ = (r)->y0 / TILE; ty_ <= ((r)->y1 - 1) / TILE; ++ty_) \
+        for (int tx_ = (r)->x0 / TILE, tile = ty_ * (c)->tiles_x + tx_; tx_ <= ((r)->x1 - 1) / TILE; ++tx_, ++tile)
 
-/* Set up the triangles of chunks [begin, end) in one pass: the records go to the worker's
- * scratch, then to a copy of exactly their size. */
+/* Set up the triangles of chunks [begin, end) (one group): the keys reject the triangles without
+ * a pixel centre in their box, the others' records go to the worker's scratch, then to a copy of
+ * exactly their size; the group's references per tile are counted for the binning. */
 static void setup_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     const long ntri = c->first_tri[c->nmeshes];
     rtri *buf = c->scratch + 2 * CHUNK * (size_t)worker;
     pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
+    long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * (size_t)c->ntiles;
     for (long ch = begin; ch < end; ++ch) {
         const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
-        long n = 0;
-        /* gather the corners first: a loop without data-dependent branches keeps many of
-         * these scattered loads in flight */
+        long n = 0, nc = 0;
+        int m = 0;
+        /* loops without data-dependent branches keep many of these scattered loads in flight */
         for (long g = g0; g < g1; ++g) {
-            int m, t;
-            global_to_local(c, g, &m, &t);
-            const int *tv = c->meshes[m].tri + 3 * (size_t)t;
-            const pvert *pv = c->pv + c->first_vert[m];
-            for (int k = 0; k < 3; ++k) corner[3 * (g - g0) + k] = pv[tv[k]];
+            while (g >= c->first_tri[m + 1]) ++m;
+            const int *tv = c->meshes[m].tri + 3 * (size_t)(g - c->first_tri[m]);
+            const pkey *k = c->key + c->first_vert[m], *a = &k[tv[0]], *b = &k[tv[1]], *d = &k[tv[2]];
+            const int maxfx = a->fx > b->fx ? a->fx : b->fx, mincx = a->cx < b->cx ? a->cx : b->cx;
+            const int maxfy = a->fy > b->fy ? a->fy : b->fy, mincy = a->cy < b->cy ? a->cy : b->cy;
+            const int empty = (maxfx > d->fx ? maxfx : d->fx) < (mincx < d->cx ? mincx : d->cx) ||
+                              (maxfy > d->fy ? maxfy : d->fy) < (mincy < d->cy ? mincy : d->cy);
+            cand[nc] = g;
+            nc += !empty;
         }
-        for (long g = g0; g < g1; ++g) {
-            int m, t;
-            global_to_local(c, g, &m, &t);
-            n += setup_tri(c, m, t, corner + 3 * (g - g0), buf + n);
+        m = 0;
+        for (long i = 0; i < nc; ++i) {
+            while (cand[i] >= c->first_tri[m + 1]) ++m;
+            const int *tv = c->meshes[m].tri + 3 * (size_t)(cand[i] - c->first_tri[m]);
+            const pvert *pv = c->pv + c->first_vert[m];
+            for (int k = 0; k < 3; ++k) corner[3 * i + k] = pv[tv[k]];
+        }
+        m = 0;
+        for (long i = 0; i < nc; ++i) {
+            while (cand[i] >= c->first_tri[m + 1]) ++m;
+            n += setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, buf + n);
         }
         c->chunk_count[ch] = n; /* records but no copy: out of memory, seen by raster_draw */
         if (n && (c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) memcpy(c->chunk_recs[ch], buf, sizeof(rtri) * (size_t)n);
+        for (long i = 0; i < n; ++i) FOR_TILES(c, &buf[i], t) ++bin[t];
     }
 }
 
-/* Rasterize the records binned to one tile, in record order (deterministic ties). */
-static void tile_job(void *arg, int worker, long begin, long end)
+/* The group's references into the tile lists, from the offsets the prefix sum left in bin. */
+static void bin_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
+    long *bin = c->bin + (size_t)(begin / c->group) * (size_t)c->ntiles;
+    for (long ch = begin; ch < end; ++ch)
+        for (long i = 0; i < c->chunk_count[ch]; ++i) {
+            const rtri *r = &c->chunk_recs[ch][i];
+            FOR_TILES(c, r, t) c->tile_list[bin[t]++] = r;
+        }
+}
+
+/* Sort list[0 .. n) by (mesh, tri, fan), i.e. into the order the unreordered meshes give: LSD
+ * radix sort on 11-bit digits of the key (first_tri[mesh] + tri) * 2 + fan, buf: 4 n words. */
+static void sort_list(const ctx_t *c, const rtri **list, long n, void *buf)
+{
+    enum { BITS = 11, RADIX = 1 << BITS };
+    uint64_t *key[2] = {buf, (uint64_t *)buf + n};
+    const rtri **ptr[2] = {list, (const rtri **)((uint64_t *)buf + 2 * n)};
+    for (long i = 0; i < n; ++i) key[0][i] = ((uint64_t)(c->first_tri[list[i]->mesh] + list[i]->tri) << 1) | list[i]->fan;
+    const uint64_t top = (uint64_t)c->first_tri[c->nmeshes] << 1;
+    int from = 0;
+    for (int shift = 0; shift == 0 || top >> shift; shift += BITS, from ^= 1) {
+        long count[RADIX + 1] = {0};
+        for (long i = 0; i < n; ++i) ++count[(key[from][i] >> shift & (RADIX - 1)) + 1];
+        for (int d = 0; d < RADIX; ++d) count[d + 1] += count[d];
+        for (long i = 0; i < n; ++i) {
+            const long at = count[key[from][i] >> shift & (RADIX - 1)]++;
+            key[from ^ 1][at] = key[from][i];
+            ptr[from ^ 1][at] = ptr[from][i];
+        }
+    }
+    if (from) memcpy(list, ptr[1], sizeof(rtri *) * (size_t)n);
+}
+
+/* Rasterize the records binned to one tile in the order of the unreordered meshes' triangles
+ * (the z-buffer keeps the first of equal depths: deterministic ties). */
+static void tile_job(void *arg, int worker, long begin, long end)
+{
+    ctx_t *c = arg;
     framebuf *fb = c->fb;
+    uint64_t *buf = (uint64_t *)c->tile_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
+    rtri *local = (rtri *)(buf + 4 * (size_t)c->maxlist);
     for (long tile = begin; tile < end; ++tile) {
+        const rtri **list = c->tile_list + c->tile_first[tile];
+        const long n = c->tile_first[tile + 1] - c->tile_first[tile];
+        if (c->sort) sort_list(c, list, n, buf);
+        /* the tile's records gathered first: independent loads, many misses in flight */
+        for (long i = 0; i < n; ++i) local[i] = *list[i];
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
-        for (int i = c->tile_first[tile]; i < c->tile_first[tile + 1]; ++i) {
-            const rtri *r = &c->recs[c->tile_list[i]];
+        for (long i = 0; i < n; ++i) {
+            const rtri *r = &local[i];
             const double area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
-            double ex[3], ey[3], e0[3];
+            double ax[3], ay[3], ex[3], ey[3], sg[3];
             int bias[3];
             for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
                 const int a = (k + 1) % 3, b = (k + 2) % 3;
                 const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
-                ex[k] = -dy;
-                ey[k] = dx;
-                e0[k] = dy * r->x[a] - dx * r->y[a];
+                /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
+                 * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
+                 * products and get exactly opposite values, so no pixel centre falls between them */
+                const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
+                const int lo = fwd ? a : b, hi = fwd ? b : a;
+                ax[k] = r->x[lo];
+                ay[k] = r->y[lo];
+                ex[k] = r->x[hi] - r->x[lo];
+                ey[k] = r->y[hi] - r->y[lo];
+                sg[k] = fwd ? -1.0 : 1.0;
                 bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
             }
             const int x0 = r->x0 > tx0 ? r->x0 : tx0, x1 = r->x1 < tx1 ? r->x1 : tx1;
@@ -254,7 +361,7 @@ static void tile_job(void *arg, int worker, long begin, long end)
                     double l[3];
                     int inside = 1;
                     for (int k = 0; k < 3 && inside; ++k) {
-                        l[k] = ex[k] * px + ey[k] * py + e0[k];
+                        l[k] = sg[k] * ((px - ax[k]) * ey[k] - (py - ay[k]) * ex[k]);
                         inside = l[k] > 0 || (l[k] == 0 && bias[k]);
                     }
                     if (!inside) continue;
@@ -318,55 +425,46 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     for (int m = 0; m < nmeshes; ++m) c.first_vert[m + 1] = c.first_vert[m] + meshes[m].nv;
     const long nchunks = c.nchunks = (ntri + CHUNK - 1) / CHUNK;
     const int nw = nthreads < 1 ? 1 : nthreads > SHL_MAX_THREADS ? SHL_MAX_THREADS : nthreads;
-    c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
-    c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
-    c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
-    c.scratch = work(fb, 1, sizeof(rtri) * 2 * CHUNK * (size_t)nw);
-    c.corners = work(fb, 3, sizeof(pvert) * 3 * CHUNK * (size_t)nw);
-    if (!c.pv || !c.chunk_recs || !c.chunk_count || !c.scratch || !c.corners) goto done;
-    par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
-    par_for(nchunks, 1, nw, setup_job, &c);
-    long sum = 0;
-    for (long ch = 0; ch < nchunks; ++ch) {
-        const long k = c.chunk_count[ch];
-        if (k && !c.chunk_recs[ch]) goto done;
-        c.chunk_count[ch] = sum;
-        sum += k;
-    }
-    c.chunk_count[nchunks] = sum;
-    c.nrecs = sum;
-    c.recs = work(fb, 2, sizeof(rtri) * (size_t)(sum ? sum : 1));
-    if (!c.recs) goto done;
-    for (long ch = 0; ch < nchunks; ++ch)
-        if (c.chunk_recs[ch])
-            memcpy(c.recs + c.chunk_count[ch], c.chunk_recs[ch], sizeof(rtri) * (size_t)(c.chunk_count[ch + 1] - c.chunk_count[ch]));
+    c.keyed = fb->w < SHRT_MAX && fb->h < SHRT_MAX;
     c.tiles_x = (fb->w + TILE - 1) / TILE;
     c.tiles_y = (fb->h + TILE - 1) / TILE;
-    const int ntiles = c.tiles_x * c.tiles_y;
-    c.tile_first = calloc((size_t)ntiles + 1, sizeof(int));
+    const int ntiles = c.ntiles = c.tiles_x * c.tiles_y;
+    c.group = 1 + (long)((double)nchunks * ntiles / (1 << 21)); /* at most ~2M bin counters */
+    c.ngroups = (nchunks + c.group - 1) / c.group;
+    c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
+    c.key = work(fb, 2, sizeof(pkey) * (size_t)(c.first_vert[nmeshes] + 1));
+    c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
+    c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
+    c.bin = calloc((size_t)c.ngroups * (size_t)ntiles + 1, sizeof(long));
+    c.scratch = work(fb, 1, sizeof(rtri) * 2 * CHUNK * (size_t)nw);
+    c.corners = work(fb, 3, (sizeof(pvert) * 3 + sizeof(long)) * CHUNK * (size_t)nw);
+    if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.bin || !c.scratch || !c.corners) goto done;
+    c.cand = (long *)(c.corners + 3 * CHUNK * (size_t)nw);
+    par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
+    par_for(nchunks, c.group, nw, setup_job, &c);
+    for (long ch = 0; ch < nchunks; ++ch)
+        if (c.chunk_count[ch] && !c.chunk_recs[ch]) goto done;
+    c.tile_first = malloc(sizeof(long) * ((size_t)ntiles + 1));
     if (!c.tile_first) goto done;
-    long refs = 0;
-    for (long i = 0; i < c.nrecs; ++i) { /* binning: count, prefix, fill */
-        const rtri *r = &c.recs[i];
-        for (int ty = r->y0 / TILE; ty <= (r->y1 - 1) / TILE; ++ty)
-            for (int tx = r->x0 / TILE; tx <= (r->x1 - 1) / TILE; ++tx) ++c.tile_first[ty * c.tiles_x + tx + 1];
+    long refs = 0; /* binning: tile lists in tile order, each in record order (group by group) */
+    for (int t = 0; t < ntiles; ++t) {
+        c.tile_first[t] = refs;
+        for (long gr = 0; gr < c.ngroups; ++gr) {
+            long *b = &c.bin[(size_t)gr * (size_t)ntiles + (size_t)t];
+            const long k = *b;
+            *b = refs;
+            refs += k;
+        }
     }
-    for (int t = 0; t < ntiles; ++t) c.tile_first[t + 1] += c.tile_first[t];
-    refs = c.tile_first[ntiles];
-    c.tile_list = malloc(sizeof(int) * (size_t)(refs ? refs : 1));
-    int *fill = malloc(sizeof(int) * (size_t)ntiles);
-    if (!c.tile_list || !fill || c.nrecs > 0x7fffffffL) {
-        free(fill);
-        goto done;
-    }
-    memcpy(fill, c.tile_first, sizeof(int) * (size_t)ntiles);
-    for (long i = 0; i < c.nrecs; ++i) {
-        const rtri *r = &c.recs[i];
-        for (int ty = r->y0 / TILE; ty <= (r->y1 - 1) / TILE; ++ty)
-            for (int tx = r->x0 / TILE; tx <= (r->x1 - 1) / TILE; ++tx) c.tile_list[fill[ty * c.tiles_x + tx]++] = (int)i;
-    }
-    free(fill);
-    par_for(ntiles, 1, nthreads, tile_job, &c);
+    c.tile_first[ntiles] = refs;
+    c.tile_list = malloc(sizeof(rtri *) * (size_t)(refs ? refs : 1));
+    if (!c.tile_list) goto done;
+    par_for(nchunks, c.group, nw, bin_job, &c);
+    for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
+    for (int t = 0; t < ntiles; ++t)
+        c.maxlist = c.tile_first[t + 1] - c.tile_first[t] > c.maxlist ? c.tile_first[t + 1] - c.tile_first[t] : c.maxlist;
+    if (!(c.tile_buf = work(fb, 4, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
+    par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
     free(c.first_tri);
@@ -375,6 +473,7 @@ done:
         for (long ch = 0; ch < c.nchunks; ++ch) free(c.chunk_recs[ch]);
     free(c.chunk_recs);
     free(c.chunk_count);
+    free(c.bin);
     free(c.tile_first);
     free(c.tile_list);
     return st;

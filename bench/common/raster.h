@@ -2,7 +2,10 @@
  * multi-threaded 32x32 tiles.  raster_draw computes a visibility buffer
  * (mesh, triangle and perspective-correct barycentrics per pixel centre);
  * raster_resolve then interpolates any per-vertex colours through it, so one
- * visibility pass serves every lighting method compared on a scene. */
+ * visibility pass serves every lighting method compared on a scene.  A pixel is
+ * covered when its centre is inside the triangle; a centre on an edge goes to
+ * exactly one of the edge's two triangles (watertight: the two evaluate the edge
+ * function with the same operands and get exactly opposite values). */
 #ifndef SHL_BENCH_RASTER_H
 #define SHL_BENCH_RASTER_H
 
@@ -18,6 +21,10 @@ typedef struct {
     const double *pos; /* 3*nv */
     const int *tri;    /* 3*nt */
     int back_black;    /* resolve: triangles seen from behind (clockwise on screen) are black */
+    const int *tri_id; /* NULL, or per triangle its index in the mesh the caller sees: tri is that mesh's
+                          triangles reordered for memory locality (pos and tri renumbered alike);
+                          fb->tri reports tri_id[t], and raster_draw resolves depth ties in tri_id
+                          order, so the buffer is the one of the unreordered mesh, bit for bit */
 } raster_mesh;
 
 typedef struct {
@@ -26,8 +33,8 @@ typedef struct {
     int *mesh, *tri;       /* mesh index and triangle per pixel (-1: background) */
     float *bary;           /* 3 per pixel: weights of the triangle's vertices */
     unsigned char *back;   /* 1: the triangle is seen from behind */
-    void *work[4];         /* raster_draw's buffers, kept from one draw to the next */
-    size_t work_len[4];    /* their sizes in bytes */
+    void *work[5];         /* raster_draw's buffers, kept from one draw to the next */
+    size_t work_len[5];    /* their sizes in bytes */
 } framebuf;
 
 int framebuf_init(framebuf *fb, int w, int h); /* 0 or -1 */
