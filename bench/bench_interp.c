@@ -14,7 +14,8 @@
  *    time, on demand);
  *  - per-vertex set-up cost: lmax 0 (3 coefficients, shorter than a vector: both
  *    variants run the reference) is the cell search and weights plus 8 tiny loads,
- *    the part vectorizing across coefficients does not touch; 2 threads against 1;
+ *    the part vectorizing across coefficients does not touch; 2 threads against 1,
+ *    with the CPU efficiency (process CPU time, 1 thread / 2 threads);
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
  * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
 #if defined(__linux__) && !defined(_DEFAULT_SOURCE)
@@ -45,6 +46,14 @@ static double thread_cpu_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 static double (*one_core_now)(void) = bench_now;
+
+/* CPU time of the whole process (all threads), seconds. */
+static double process_cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
 static size_t max_bytes; /* --mb: a cap on out_of_cache_bytes (0: none) */
 
 /* Bytes that cannot stay in any cache: 4 x the last-level cache, at least 120 MB
@@ -356,10 +365,10 @@ int main(int argc, char **argv)
            hp_advised ? "madvise MADV_HUGEPAGE taken" : "no huge-page advice here", huge_mb, huge_read * 1e-9);
     if (csv) {
         fprintf(csv, "section,lmax,method,grid,isa,ns_simd,ns_reference,speedup,mvertices_per_s,bytes_per_vertex,gb_per_s,of_read_bw,"
-                     "ns_no_lookahead,of_read_bw_no_lookahead\n");
-        fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f,,\n", read_peak * 1e-9, triad_peak * 1e-9);
-        fprintf(csv, "bandwidth_l2,,,,,,,,,,%.3f,,,\n", l2_peak * 1e-9);
-        fprintf(csv, "bandwidth_huge_pages,,,,,,,,,,%.3f,,,\n", huge_read * 1e-9);
+                     "ns_no_lookahead,of_read_bw_no_lookahead,cpu_efficiency\n");
+        fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f,,,\n", read_peak * 1e-9, triad_peak * 1e-9);
+        fprintf(csv, "bandwidth_l2,,,,,,,,,,%.3f,,,,\n", l2_peak * 1e-9);
+        fprintf(csv, "bandwidth_huge_pages,,,,,,,,,,%.3f,,,,\n", huge_read * 1e-9);
     }
 
     const char *mname[3] = {"trilinear", "Taylor", "Hermite"};
@@ -420,7 +429,7 @@ int main(int argc, char **argv)
                        mname[m], big ? "DRAM" : "L2", mr * 1e9, ms * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, 100.0 * gbs / peak,
                        m1 * 1e9, 100.0 * bpv / m1 / peak, msp1);
                 if (csv)
-                    fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f,%.2f,%.3f\n", lmax, mname[m],
+                    fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f,%.2f,%.3f,\n", lmax, mname[m],
                             big ? "dram" : "l2", isa, ms * 1e9, mr * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, gbs / peak, m1 * 1e9,
                             bpv / m1 / peak);
             }
@@ -462,14 +471,19 @@ int main(int argc, char **argv)
         printf("| random | %.1f | %.1f | %.0f%% | |\n", mr * 1e9, bpv / mr * 1e-9, 100.0 * bpv / mr / read_peak);
         printf("| sorted by cell | %.1f | %.1f | %.0f%% | **%.2fx** |\n", ms * 1e9, bpv / ms * 1e-9, 100.0 * bpv / ms / read_peak,
                bench_median(sp, rounds));
-        if (csv) fprintf(csv, "order,8,Hermite,dram,%s,%.2f,%.2f,%.3f,,%.0f,,,,\n", isa, ms * 1e9, mr * 1e9, bench_median(sp, rounds), bpv);
+        if (csv) fprintf(csv, "order,8,Hermite,dram,%s,%.2f,%.2f,%.3f,,%.0f,,,,,\n", isa, ms * 1e9, mr * 1e9, bench_median(sp, rounds), bpv);
         free(spts);
         shl_grid_destroy(g);
         shl_ctx_destroy(ctx);
     }
 
     printf("\n## Hermite interpolation, 2 threads vs 1 (SIMD kernel; calls of 8192 vertices, outputs not reused)\n\n");
-    printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up |\n|---|---|---|---|---|\n");
+    printf("CPU efficiency: CPU time of the process per vertex, 1 thread / 2 threads (both threads' CPU time): below\n"
+           "100%%, each core works slower next to the other (shared memory, clock); the speed-up the threads' CPU time\n"
+           "allows is 2 x that; a wall-clock speed-up below it is time the threads do not run (start, wake-up,\n"
+           "uneven ends, or, on a loaded machine, other processes).\n\n");
+    printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up | CPU efficiency | speed-up "
+           "by CPU time |\n|---|---|---|---|---|---|---|\n");
     double *big_out = xmalloc(sizeof(double) * 8192 * 3 * SHL_NCOEFFS(8));
     for (int li = quick ? 2 : 1; li < 3; ++li) {
         const int lmax = lmaxes[li];
@@ -480,17 +494,24 @@ int main(int argc, char **argv)
             shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
             job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out, 1}, j2 = j1;
             j2.nthreads = 2;
-            double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS];
+            double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS], eff[MAX_ROUNDS];
             run(&j1);
             run(&j2);
             for (int r = 0; r < rounds; ++r) {
+                const double c0 = process_cpu_now();
                 t1[r] = run(&j1);
+                const double c1 = process_cpu_now();
                 t2[r] = run(&j2);
+                eff[r] = (c1 - c0) / (process_cpu_now() - c1); /* CPU seconds, 1 thread / 2 threads */
                 sp[r] = t1[r] / t2[r];
             }
             const double m1 = bench_median(t1, rounds), m2 = bench_median(t2, rounds), msp = bench_median(sp, rounds);
-            printf("| %d | %s | %.1f | %.1f | **%.2fx** |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp);
-            if (csv) fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,,,\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp);
+            const double meff = bench_median(eff, rounds);
+            printf("| %d | %s | %.1f | %.1f | **%.2fx** | %.0f%% | %.2fx |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp,
+                   100.0 * meff, 2.0 * meff);
+            if (csv)
+                fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,,,,%.3f\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9,
+                        msp, meff);
             shl_grid_destroy(g);
         }
         shl_ctx_destroy(ctx);
@@ -519,9 +540,9 @@ int main(int argc, char **argv)
     printf("| Hermite interpolation per vertex | RTX 2080 Ti, Wu 2020 Table 1 (Dragon & Bunny ~640K vertices in 6.6 ms; Asian Dragon ~710K in 8.1 ms) | %.0f, %.0f | shl_grid_interp Hermite, float grid, %s: L2-resident / DRAM random | %.2f / %.2f |\n",
            wu_interp * 1e-6, wu_interp2 * 1e-6, isa, 1e-6 / hermite8[0], 1e-6 / hermite8[1]);
     if (csv) {
-        fprintf(csv, "papers,8,polygon,wang2018_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wang * 1e-6, 1e-6 / quad8);
-        fprintf(csv, "papers,8,polygon_grad,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wu_grid * 1e-6, 1e-6 / tri8g);
-        fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
+        fprintf(csv, "papers,8,polygon,wang2018_gpu_mps,%s,%.3f,,,%.3f,,,,,,\n", isa, wang * 1e-6, 1e-6 / quad8);
+        fprintf(csv, "papers,8,polygon_grad,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,,\n", isa, wu_grid * 1e-6, 1e-6 / tri8g);
+        fprintf(csv, "papers,8,Hermite,wu2020_gpu_mps,%s,%.3f,,,%.3f,,,,,,\n", isa, wu_interp * 1e-6, 1e-6 / hermite8[0]);
     }
     printf("\n(checksum %g)\n", (double)bench_sink);
     if (fclose(csv)) return 1;

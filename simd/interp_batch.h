@@ -100,10 +100,30 @@ static void taylor(const float *const f[8], const shl__interp_point *s, int nc, 
         }
 }
 
-/* Wu 2020 Alg. 4 per channel: along x (lines 4-7), y (lines 8-11), z (line 12). */
+/* Wu 2020 Alg. 4 lines 4-7 for corners a = 2q and b = 2q + 1: along x, the
+ * value g and the y- and z-gradients g_y, g_z carried linearly (lines 6-7). */
+typedef struct {
+    vd g, g_y, g_z;
+} along_x;
+
+static inline along_x hermite_x(const float *a, const float *b, size_t vo, size_t gxo, size_t gyo, size_t gzo,
+                                const vd x[4], vd ux, vd vx)
+{
+    along_x r;
+    r.g = vd_fma(x[0], vd_load_float(a + vo),
+                 vd_fma(x[1], vd_load_float(a + gxo), vd_fma(x[2], vd_load_float(b + vo), vd_mul(x[3], vd_load_float(b + gxo)))));
+    r.g_y = vd_fma(vx, vd_load_float(a + gyo), vd_mul(ux, vd_load_float(b + gyo)));
+    r.g_z = vd_fma(vx, vd_load_float(a + gzo), vd_mul(ux, vd_load_float(b + gzo)));
+    return r;
+}
+
+/* Wu 2020 Alg. 4 per channel: along x (lines 4-7), y (lines 8-11), z (line 12).
+ * Straight-line code per block, each y-row (corners 0-3, then 4-7) reduced as
+ * soon as its two x-rows exist: with the q loop and arrays of the reference,
+ * gcc -O2 kept g, g_y, g_z on the stack (a store and a reload per value). */
 static void hermite(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
-    const vd x0 = vd_set1(s->hw[0][0]), x1 = vd_set1(s->hw[0][1]), x2 = vd_set1(s->hw[0][2]), x3 = vd_set1(s->hw[0][3]);
+    const vd x[4] = {vd_set1(s->hw[0][0]), vd_set1(s->hw[0][1]), vd_set1(s->hw[0][2]), vd_set1(s->hw[0][3])};
     const vd y0 = vd_set1(s->hw[1][0]), y1 = vd_set1(s->hw[1][1]), y2 = vd_set1(s->hw[1][2]), y3 = vd_set1(s->hw[1][3]);
     const vd z0 = vd_set1(s->hw[2][0]), z1 = vd_set1(s->hw[2][1]), z2 = vd_set1(s->hw[2][2]), z3 = vd_set1(s->hw[2][3]);
     const vd ux = vd_set1(s->u[0]), vx = vd_set1(1.0 - s->u[0]), uy = vd_set1(s->u[1]), vy = vd_set1(1.0 - s->u[1]);
@@ -113,19 +133,15 @@ static void hermite(const float *const f[8], const shl__interp_point *s, int nc,
             size_t vo, gxo;
             channel_block(c, k, nc, ahead, &vo, &gxo);
             const size_t gyo = gxo + nc, gzo = gxo + 2 * (size_t)nc;
-            vd g[4], g_y[4], g_z[4];
-            for (int q = 0; q < 4; ++q) { /* lines 4-7: along x, corners 2q and 2q+1 */
-                const float *a = f[2 * q], *b = f[2 * q + 1];
-                g[q] = vd_fma(x0, vd_load_float(a + vo),
-                              vd_fma(x1, vd_load_float(a + gxo), vd_fma(x2, vd_load_float(b + vo), vd_mul(x3, vd_load_float(b + gxo)))));
-                g_y[q] = vd_fma(vx, vd_load_float(a + gyo), vd_mul(ux, vd_load_float(b + gyo)));
-                g_z[q] = vd_fma(vx, vd_load_float(a + gzo), vd_mul(ux, vd_load_float(b + gzo)));
-            }
             /* lines 8-11: along y; line 12: along z */
-            const vd h0 = vd_fma(y0, g[0], vd_fma(y1, g_y[0], vd_fma(y2, g[1], vd_mul(y3, g_y[1]))));
-            const vd h1 = vd_fma(y0, g[2], vd_fma(y1, g_y[2], vd_fma(y2, g[3], vd_mul(y3, g_y[3]))));
-            const vd h0_z = vd_fma(vy, g_z[0], vd_mul(uy, g_z[1]));
-            const vd h1_z = vd_fma(vy, g_z[2], vd_mul(uy, g_z[3]));
+            const along_x q0 = hermite_x(f[0], f[1], vo, gxo, gyo, gzo, x, ux, vx);
+            const along_x q1 = hermite_x(f[2], f[3], vo, gxo, gyo, gzo, x, ux, vx);
+            const vd h0 = vd_fma(y0, q0.g, vd_fma(y1, q0.g_y, vd_fma(y2, q1.g, vd_mul(y3, q1.g_y))));
+            const vd h0_z = vd_fma(vy, q0.g_z, vd_mul(uy, q1.g_z));
+            const along_x q2 = hermite_x(f[4], f[5], vo, gxo, gyo, gzo, x, ux, vx);
+            const along_x q3 = hermite_x(f[6], f[7], vo, gxo, gyo, gzo, x, ux, vx);
+            const vd h1 = vd_fma(y0, q2.g, vd_fma(y1, q2.g_y, vd_fma(y2, q3.g, vd_mul(y3, q3.g_y))));
+            const vd h1_z = vd_fma(vy, q2.g_z, vd_mul(uy, q3.g_z));
             vd_store(out + vo, vd_fma(z0, h0, vd_fma(z1, h0_z, vd_fma(z2, h1, vd_mul(z3, h1_z)))));
         }
 }

@@ -199,7 +199,13 @@ static int grid_interp(const shl_grid *grid, int method, double taylor_b, int np
     }
     const size_t esize = grid->storage == SHL_GRID_DOUBLE ? sizeof(double) : sizeof(float);
     interp_job job = {grid, method, taylor_b, pts, rgb, grid->nnodes * grid->node_len * esize > SHL__INTERP_AHEAD_BYTES};
-    const int st = shl__parallel_for(npts, 256, nthreads, interp_range, &job);
+    /* A worker per 256 points at most (a thread's create + join took >= 16 us
+     * here, ~100 points at lmax 4; more when an idle vCPU must wake); chunks of
+     * 32 points and more (guided), so that the workers end within ~32 points of
+     * each other (lmax 8 in L2: ~11 us; 256-point chunks left up to 90 us);
+     * each chunk's first point goes without look-ahead. */
+    const int nw = shl__parallel_workers(npts, 256, nthreads);
+    const int st = shl__parallel_for_guided(npts, 32, nw, interp_range, &job);
     if (st == SHL_OK && nclamped) *nclamped = outside;
     return st;
 }

@@ -16,6 +16,7 @@ typedef struct {
     pthread_cond_t gate;
     int state; /* 0: wait, 1: run, -1: abort */
     long next, n, grain;
+    long split; /* guided: a chunk is about the remaining items / split (0: fixed chunks of grain) */
     shl__range_fn fn;
     void *arg;
 } pool;
@@ -29,8 +30,12 @@ static void run_chunks(pool *p, int worker)
 {
     for (;;) {
         pthread_mutex_lock(&p->lock);
-        const long begin = p->next;
-        if (begin < p->n) p->next = begin + (p->n - begin < p->grain ? p->n - begin : p->grain);
+        const long begin = p->next, left = p->n - begin;
+        if (begin < p->n) {
+            const long want = p->split ? left / p->split / p->grain * p->grain : 0; /* a multiple of grain */
+            const long size = want > p->grain ? want : p->grain;
+            p->next = begin + (left < size ? left : size);
+        }
         const long end = p->next;
         pthread_mutex_unlock(&p->lock);
         if (begin >= p->n) return;
@@ -56,14 +61,16 @@ int shl__parallel_workers(long n, long grain, int nthreads)
     return chunks < nthreads ? (int)chunks : nthreads;
 }
 
-int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg)
+static int parallel_run(long n, long grain, int nthreads, int guided, shl__range_fn fn, void *arg)
 {
     const int nw = shl__parallel_workers(n, grain, nthreads);
     if (nw <= 1) {
         if (n > 0) fn(arg, 0, 0, n);
         return SHL_OK;
     }
-    pool p = {.state = 0, .next = 0, .n = n, .grain = grain, .fn = fn, .arg = arg};
+    /* guided: chunks of 1/(4 nw) of what is left, so that the last ones, and the
+     * wait for the slowest worker, are short (OpenMP's guided schedule, halved) */
+    pool p = {.state = 0, .next = 0, .n = n, .grain = grain, .split = guided ? 4L * nw : 0, .fn = fn, .arg = arg};
     if (pthread_mutex_init(&p.lock, NULL)) return SHL_ETHREAD;
     if (pthread_cond_init(&p.gate, NULL)) {
         pthread_mutex_destroy(&p.lock);
@@ -88,6 +95,16 @@ int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *
     pthread_cond_destroy(&p.gate);
     pthread_mutex_destroy(&p.lock);
     return ok ? SHL_OK : SHL_ETHREAD;
+}
+
+int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg)
+{
+    return parallel_run(n, grain, nthreads, 0, fn, arg);
+}
+
+int shl__parallel_for_guided(long n, long grain, int nthreads, shl__range_fn fn, void *arg)
+{
+    return parallel_run(n, grain, nthreads, 1, fn, arg);
 }
 
 typedef struct {

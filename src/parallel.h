@@ -17,6 +17,13 @@ int shl__parallel_workers(long n, long grain, int nthreads);
  * fn, are joined, and SHL_ETHREAD is returned (fn never ran). */
 int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg);
 
+/* shl__parallel_for with chunks that shrink as the work runs out: about 1/(4
+ * workers) of the items left, a multiple of grain and at least grain (the
+ * last may be shorter), for callers whose results do not depend on the chunks
+ * (grid interpolation): few claims, and the workers finish within about one
+ * grain of each other. */
+int shl__parallel_for_guided(long n, long grain, int nthreads, shl__range_fn fn, void *arg);
+
 /* Work on items [begin, end) with the worker's own scratch ws (NULL if none). */
 typedef void (*shl__ws_range_fn)(void *arg, void *ws, long begin, long end);
 

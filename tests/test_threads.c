@@ -5,6 +5,7 @@
 #include "geom.h"
 #include "harness.h"
 #include "internal.h" /* shl__thread_fail_after: the test hook of the SHL_ALLOC_HOOKS build */
+#include "parallel.h" /* shl__parallel_for_guided */
 #include "shlight.h"
 #include <pthread.h>
 #include <string.h>
@@ -186,4 +187,53 @@ SHL_TEST(threads_batch_mt_failures)
     CHECK(bad == 0 && ethread == 12);
     harness_note("%d thread-creation failures handled, nothing written", ethread);
     batch_case_free(&b);
+}
+
+/* ---- shl__parallel_for_guided (src/parallel.c: the grid interpolation's schedule) ---- */
+
+enum { GUIDED_MAX = 8197, GUIDED_GRAIN = 32 };
+static long guided_end[GUIDED_MAX]; /* chunk [b, guided_end[b]) ran (0: no chunk began at b) */
+static int guided_visits[GUIDED_MAX];
+
+static void guided_range(void *arg, int worker, long begin, long end)
+{
+    (void)arg;
+    (void)worker;
+    guided_end[begin] = end; /* chunks are disjoint: no two workers write one entry */
+    for (long i = begin; i < end; ++i) ++guided_visits[i];
+}
+
+/* Every item runs exactly once; chunks begin at multiples of the grain, hold at
+ * least a grain (the last may hold less), shrink in the order of the items, and
+ * the first is about 1/(4 workers) of the items. */
+SHL_TEST(threads_parallel_for_guided_chunks)
+{
+    const long sizes[] = {1, 31, 32, 33, 1000, 8192, GUIDED_MAX};
+    int bad = 0, nchunks_8192_2 = 0;
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si)
+        for (int nt = 1; nt <= 4; ++nt) {
+            const long n = sizes[si];
+            memset(guided_end, 0, sizeof guided_end);
+            memset(guided_visits, 0, sizeof guided_visits);
+            const int nw = shl__parallel_workers(n, GUIDED_GRAIN, nt);
+            CHECK(shl__parallel_for_guided(n, GUIDED_GRAIN, nt, guided_range, NULL) == SHL_OK);
+            for (long i = 0; i < n; ++i) bad += guided_visits[i] != 1;
+            long b = 0, prev = n + 1;
+            int nchunks = 0;
+            while (b < n && guided_end[b] > b) {
+                const long size = guided_end[b] - b;
+                bad += b % GUIDED_GRAIN != 0 || size > prev || (size < GUIDED_GRAIN && guided_end[b] != n);
+                if (b == 0 && nw > 1) { /* the first claim: (n / 4 nw) rounded down to the grain, at least the grain */
+                    const long want = n / (4L * nw) / GUIDED_GRAIN * GUIDED_GRAIN;
+                    bad += size != (want > GUIDED_GRAIN ? (want < n ? want : n) : (GUIDED_GRAIN < n ? GUIDED_GRAIN : n));
+                }
+                prev = size;
+                b = guided_end[b];
+                ++nchunks;
+            }
+            bad += b != n;
+            if (n == 8192 && nt == 2) nchunks_8192_2 = nchunks;
+        }
+    CHECK(bad == 0);
+    harness_note("8192 items, grain 32, 2 workers: %d chunks (fixed chunks of 32: 256, of 256: 32)", nchunks_8192_2);
 }
