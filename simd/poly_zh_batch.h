@@ -50,9 +50,11 @@ static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
 }
 
 /* zh4 != NULL (with_grad): instead of the blocks zh, zh_grad, the value and the 3 gradient
- * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below). */
+ * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
+ * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
-                                                           double *zh_grad, double *zh4, const int with_grad)
+                                                           double *zh_grad, double *zh4, double gscale,
+                                                           const int with_grad)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
@@ -123,7 +125,7 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                     const zv jl = tlm1 * i_lm1 + j_lm2;
                     j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
                     edge_i[l] = il;
-                    /* B_lmax (l = ltop here) goes into the unused bsum[lmax] */
+                    if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
                 }
                 /* Eq. 31: C_{l-1} */
                 const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
@@ -146,10 +148,10 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
         if (zh4) {
             for (int l = 0; l <= lmax; ++l) {
-                const zv kl = zv_set1(norm[l]);
+                const zv kl = zv_set1(norm[l]), kg = zv_set1(norm[l] * gscale);
                 double t[4][ZW];
                 zv_scatter(kl * surf[l], t[0], 1, ZW); /* Eq. 13 */
-                for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], t[1 + ax], 1, ZW);
+                for (int ax = 0; ax < 3; ++ax) zv_scatter(kg * gsum[ax][l], t[1 + ax], 1, ZW);
                 double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
                 for (int k = 0; k < cnt; ++k)
                     for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
@@ -175,12 +177,12 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
 
 void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
 {
-    zh_lanes(g, lmax, zh, NULL, NULL, 0);
+    zh_lanes(g, lmax, zh, NULL, NULL, 1.0, 0);
 }
 
 void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
 {
-    zh_lanes(g, lmax, zh, zh_grad, NULL, 1);
+    zh_lanes(g, lmax, zh, zh_grad, NULL, 1.0, 1);
 }
 
 /* Wang 2018 Eq. 33 with the lobe pairs of src/zh_lobes.c (lobe 2k-1 and its mirror 2k:
@@ -199,8 +201,10 @@ enum { NQ = 4 / ZQ };
 typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
 
 /* out row m (index at + step m) = sum_k W[m][k] in[k], W row-major rows x cols */
-static inline void quad_matvec(const double *w, int rows, int cols, const zq (*in)[NQ], const zq (*scale)[NQ],
-                               double *coeffs, double *grad, int nc, int at, int step)
+__attribute__((always_inline)) static inline void quad_matvec(const double *w, int rows, int cols,
+                                                              const zq (*in)[NQ], const zq (*scale)[NQ],
+                                                              double *coeffs, double *grad, int nc, int at,
+                                                              int step)
 {
     for (int m = 0; m < rows; ++m) {
         zq acc[NQ];
@@ -211,7 +215,7 @@ static inline void quad_matvec(const double *w, int rows, int cols, const zq (*i
         }
         double t[4];
         for (int q = 0; q < NQ; ++q) {
-            acc[q] = acc[q] * scale[0][q] * scale[1][q];
+            if (scale) acc[q] = acc[q] * scale[0][q] * scale[1][q];
             memcpy(t + q * ZQ, &acc[q], sizeof acc[q]);
         }
         const int i = at + step * m;
@@ -219,11 +223,13 @@ static inline void quad_matvec(const double *w, int rows, int cols, const zq (*i
     }
 }
 
-static void grad_sh(int lmax, const double *zh4, const double grad_scale[2], double *coeffs, double *grad, int nc)
+/* grad_scale NULL: the gradient in zh4 is already unscaled */
+__attribute__((always_inline)) static inline void grad_sh(int lmax, const double *zh4, const double *grad_scale,
+                                                          double *coeffs, double *grad, int nc)
 {
     const int ndir = 2 * lmax + 1;
     zq scale[2][NQ];
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < 2 && grad_scale; ++j) {
         const double t[4] = {1.0, grad_scale[j], grad_scale[j], grad_scale[j]};
         memcpy(scale[j], t, sizeof t);
     }
@@ -240,17 +246,23 @@ static void grad_sh(int lmax, const double *zh4, const double grad_scale[2], dou
                 odd[k - 1][q] = z1[q] - z2[q];
             }
         }
-        quad_matvec(shl__zh_even_w + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, (const zq(*)[NQ])even,
-                    (const zq(*)[NQ])scale, coeffs, grad, nc, l * (l + 1), 1);
+        const zq(*sc)[NQ] = grad_scale ? (const zq(*)[NQ])scale : NULL;
+        quad_matvec(shl__zh_even_w + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, (const zq(*)[NQ])even, sc, coeffs, grad, nc,
+                    l * (l + 1), 1);
         if (l > 0)
-            quad_matvec(shl__zh_odd_w + SHL__ZH_ODD_OFS(l), l, l, (const zq(*)[NQ])odd, (const zq(*)[NQ])scale,
-                        coeffs, grad, nc, l * (l + 1) - 1, -1);
+            quad_matvec(shl__zh_odd_w + SHL__ZH_ODD_OFS(l), l, l, (const zq(*)[NQ])odd, sc, coeffs, grad, nc,
+                        l * (l + 1) - 1, -1);
     }
 }
 
 void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc)
 {
     double zh4[4 * (2 * SHL_LMAX_MAX + 1) * (SHL_LMAX_MAX + 1)];
-    zh_lanes(g, lmax, NULL, NULL, zh4, 1);
-    grad_sh(lmax, zh4, g->grad_scale, coeffs, grad, nc);
+    if (shl__poly_hess_fold(g)) { /* 2^-E into the band weights: the same bits as multiplying afterwards */
+        zh_lanes(g, lmax, NULL, NULL, zh4, g->grad_scale[0] * g->grad_scale[1], 1);
+        grad_sh(lmax, zh4, NULL, coeffs, grad, nc);
+    } else {
+        zh_lanes(g, lmax, NULL, NULL, zh4, 1.0, 1);
+        grad_sh(lmax, zh4, g->grad_scale, coeffs, grad, nc);
+    }
 }
