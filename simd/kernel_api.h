@@ -114,9 +114,8 @@ typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double ra
  * shl__poly_zh_grad_d (src/polygon.h), results equal to theirs. */
 struct shl__poly_geom;
 typedef void (*shl__poly_zh_fn)(const struct shl__poly_geom *g, int lmax, double *zh);
-typedef void (*shl__poly_zh_grad_fn)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
-/* shl_polygon_grad after the set-up: coefficients and gradient (unscaled), from the ZH
- * integrals of shl__poly_zh_grad_d (results equal to its, reconstructed as shl__zh_to_sh). */
+/* shl_polygon_grad after the set-up: coefficients and gradient (unscaled) from the ZH
+ * integrals of shl__poly_zh_grad_d reconstructed as by shl__zh_to_sh, results equal to theirs. */
 typedef void (*shl__poly_grad_sh_fn)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc);
 
 /* The kernels of one instruction set; src/dispatch.c builds one per line of
@@ -131,7 +130,6 @@ struct shl__isa {
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
     shl__poly_zh_fn poly_zh;           /* shl_polygon (simd/poly_zh_batch.h) */
-    shl__poly_zh_grad_fn poly_zh_grad; /* the ZH integrals of shl_polygon_grad */
     shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
 };
 

@@ -188,10 +188,9 @@ void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax,
 /* Wang 2018 Eq. 33 with the lobe pairs of src/zh_lobes.c (lobe 2k-1 and its mirror 2k:
  * even block m >= 0 from their sums, odd block m < 0 from their differences) for the value
  * and the 3 gradient components at once, 4 doubles per lobe (one vector, or two of 2
- * without AVX): each weight is read
- * once for all 4, and every coefficient is the sum over k = 0, 1, ... in order, the sums of
- * shl__zh_to_sh (so the coefficients equal shl_polygon's bit for bit).  The gradient is
- * multiplied by grad_scale[0], then grad_scale[1], as shl__poly_grad_unscale. */
+ * without AVX): each weight is read once for all 4, and every coefficient is the sum over
+ * k = 0, 1, ... in order, the sums of shl__zh_to_sh (so the coefficients equal
+ * shl_polygon's bit for bit). */
 #if ZW >= 4
 #define ZQ 4 /* doubles per vector in grad_sh; NQ vectors hold the 4 outputs */
 #else
@@ -208,7 +207,7 @@ __attribute__((always_inline)) static inline void quad_matvec(const double *w, i
 {
     for (int m = 0; m < rows; ++m) {
         zq acc[NQ];
-        for (int q = 0; q < NQ; ++q) acc[q] = in[0][q] * 0.0;
+        memset(acc, 0, sizeof acc);
         for (int k = 0; k < cols; ++k) {
             const double wk = w[m * cols + k];
             for (int q = 0; q < NQ; ++q) acc[q] += wk * in[k][q];
@@ -223,7 +222,8 @@ __attribute__((always_inline)) static inline void quad_matvec(const double *w, i
     }
 }
 
-/* grad_scale NULL: the gradient in zh4 is already unscaled */
+/* The gradient rows are multiplied by grad_scale[0], then grad_scale[1], as
+ * shl__poly_grad_unscale; grad_scale NULL: zh4's gradient is already unscaled. */
 __attribute__((always_inline)) static inline void grad_sh(int lmax, const double *zh4, const double *grad_scale,
                                                           double *coeffs, double *grad, int nc)
 {
