@@ -118,7 +118,9 @@ typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double ra
  * shl__poly_zh_grad_d (src/polygon.h), results equal to theirs. */
 struct shl__poly_geom;
 typedef void (*shl__poly_zh_fn)(const struct shl__poly_geom *g, int lmax, double *zh);
-typedef void (*shl__poly_zh_grad_fn)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+/* shl_polygon_grad after the set-up: coefficients and gradient (unscaled) from the ZH
+ * integrals of shl__poly_zh_grad_d reconstructed as by shl__zh_to_sh, results equal to theirs. */
+typedef void (*shl__poly_grad_sh_fn)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc);
 
 /* The kernels of one instruction set; src/dispatch.c builds one per line of
  * simd/isa_list.h. */
@@ -132,7 +134,7 @@ struct shl__isa {
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
     shl__poly_zh_fn poly_zh;           /* shl_polygon (simd/poly_zh_batch.h) */
-    shl__poly_zh_grad_fn poly_zh_grad; /* shl_polygon_grad */
+    shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
 };
 
 /* The interpolation reference (src/interp.c, src/interp_kernel.h): the scalar
@@ -154,6 +156,7 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
                              shl__interp_ahead *ahead, double *out);                                   \
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
-    void shl__poly_zh_grad_##isa(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad);
+    void shl__poly_zh_grad_##isa(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad); \
+    void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc);
 
 #endif

@@ -49,8 +49,12 @@ static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
     for (int k = 0; k < count; ++k) out[k * stride] = t[k];
 }
 
+/* zh4 != NULL (with_grad): instead of the blocks zh, zh_grad, the value and the 3 gradient
+ * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
+ * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
-                                                           double *zh_grad, const int with_grad)
+                                                           double *zh_grad, double *zh4, double gscale,
+                                                           const int with_grad)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
@@ -121,7 +125,7 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                     const zv jl = tlm1 * i_lm1 + j_lm2;
                     j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
                     edge_i[l] = il;
-                    /* B_lmax (l = ltop here) goes into the unused bsum[lmax] */
+                    if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
                 }
                 /* Eq. 31: C_{l-1} */
                 const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
@@ -142,6 +146,18 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
         for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(s_b[l]) * bsum[l - 1] + zv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
         const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
+        if (zh4) {
+            for (int l = 0; l <= lmax; ++l) {
+                const zv kl = zv_set1(norm[l]), kg = zv_set1(norm[l] * gscale);
+                double t[4][ZW];
+                zv_scatter(kl * surf[l], t[0], 1, ZW); /* Eq. 13 */
+                for (int ax = 0; ax < 3; ++ax) zv_scatter(kg * gsum[ax][l], t[1 + ax], 1, ZW);
+                double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
+                for (int k = 0; k < cnt; ++k)
+                    for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
+            }
+            continue;
+        }
         for (int l = 0; l <= lmax; ++l) {
             const zv kl = zv_set1(norm[l]);
             const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
@@ -150,15 +166,103 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                 for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
         }
     }
-    if (area) shl__poly_zh_area(g, lmax, zh); /* coefficients as the non-gradient kernel */
+    if (area && zh4) { /* coefficients as the non-gradient kernel */
+        double za[SHL__ZH_BLOCK];
+        shl__poly_zh_area(g, lmax, za);
+        for (int l = 0; l <= lmax; ++l)
+            for (int d = 0; d < ndir; ++d) zh4[4 * ((ptrdiff_t)l * ndir + d)] = za[d * SHL__ZH_STRIDE + l];
+    } else if (area)
+        shl__poly_zh_area(g, lmax, zh);
 }
 
 void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
 {
-    zh_lanes(g, lmax, zh, NULL, 0);
+    zh_lanes(g, lmax, zh, NULL, NULL, 1.0, 0);
 }
 
 void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
 {
-    zh_lanes(g, lmax, zh, zh_grad, 1);
+    zh_lanes(g, lmax, zh, zh_grad, NULL, 1.0, 1);
+}
+
+/* Wang 2018 Eq. 33 with the lobe pairs of src/zh_lobes.c (lobe 2k-1 and its mirror 2k:
+ * even block m >= 0 from their sums, odd block m < 0 from their differences) for the value
+ * and the 3 gradient components at once, 4 doubles per lobe (one vector, or two of 2
+ * without AVX): each weight is read once for all 4, and every coefficient is the sum over
+ * k = 0, 1, ... in order, the sums of shl__zh_to_sh (so the coefficients equal
+ * shl_polygon's bit for bit). */
+#if ZW >= 4
+#define ZQ 4 /* doubles per vector in grad_sh; NQ vectors hold the 4 outputs */
+#else
+#define ZQ 2
+#endif
+enum { NQ = 4 / ZQ };
+typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
+
+/* out row m (index at + step m) = sum_k W[m][k] in[k], W row-major rows x cols */
+__attribute__((always_inline)) static inline void quad_matvec(const double *w, int rows, int cols,
+                                                              const zq (*in)[NQ], const zq (*scale)[NQ],
+                                                              double *coeffs, double *grad, int nc, int at,
+                                                              int step)
+{
+    for (int m = 0; m < rows; ++m) {
+        zq acc[NQ];
+        memset(acc, 0, sizeof acc);
+        for (int k = 0; k < cols; ++k) {
+            const double wk = w[m * cols + k];
+            for (int q = 0; q < NQ; ++q) acc[q] += wk * in[k][q];
+        }
+        double t[4];
+        for (int q = 0; q < NQ; ++q) {
+            if (scale) acc[q] = acc[q] * scale[0][q] * scale[1][q];
+            memcpy(t + q * ZQ, &acc[q], sizeof acc[q]);
+        }
+        const int i = at + step * m;
+        coeffs[i] = t[0], grad[i] = t[1], grad[nc + i] = t[2], grad[2 * nc + i] = t[3];
+    }
+}
+
+/* The gradient rows are multiplied by grad_scale[0], then grad_scale[1], as
+ * shl__poly_grad_unscale; grad_scale NULL: zh4's gradient is already unscaled. */
+__attribute__((always_inline)) static inline void grad_sh(int lmax, const double *zh4, const double *grad_scale,
+                                                          double *coeffs, double *grad, int nc)
+{
+    const int ndir = 2 * lmax + 1;
+    zq scale[2][NQ];
+    for (int j = 0; j < 2 && grad_scale; ++j) {
+        const double t[4] = {1.0, grad_scale[j], grad_scale[j], grad_scale[j]};
+        memcpy(scale[j], t, sizeof t);
+    }
+    for (int l = 0; l <= lmax; ++l) {
+        const double *z = zh4 + 4 * (ptrdiff_t)l * ndir;
+        zq even[SHL_LMAX_MAX + 1][NQ], odd[SHL_LMAX_MAX + 1][NQ];
+        memcpy(even[0], z, sizeof even[0]);
+        for (int k = 1; k <= l; ++k) {
+            zq z1[NQ], z2[NQ];
+            memcpy(z1, z + 4 * (2 * k - 1), sizeof z1);
+            memcpy(z2, z + 4 * (2 * k), sizeof z2);
+            for (int q = 0; q < NQ; ++q) {
+                even[k][q] = z1[q] + z2[q];
+                odd[k - 1][q] = z1[q] - z2[q];
+            }
+        }
+        const zq(*sc)[NQ] = grad_scale ? (const zq(*)[NQ])scale : NULL;
+        quad_matvec(shl__zh_even_w + SHL__ZH_EVEN_OFS(l), l + 1, l + 1, (const zq(*)[NQ])even, sc, coeffs, grad, nc,
+                    l * (l + 1), 1);
+        if (l > 0)
+            quad_matvec(shl__zh_odd_w + SHL__ZH_ODD_OFS(l), l, l, (const zq(*)[NQ])odd, sc, coeffs, grad, nc,
+                        l * (l + 1) - 1, -1);
+    }
+}
+
+void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc)
+{
+    double zh4[4 * (2 * SHL_LMAX_MAX + 1) * (SHL_LMAX_MAX + 1)];
+    if (shl__poly_hess_fold(g)) { /* 2^-E into the band weights: the same bits as multiplying afterwards */
+        zh_lanes(g, lmax, NULL, NULL, zh4, g->grad_scale[0] * g->grad_scale[1], 1);
+        grad_sh(lmax, zh4, NULL, coeffs, grad, nc);
+    } else {
+        zh_lanes(g, lmax, NULL, NULL, zh4, 1.0, 1);
+        grad_sh(lmax, zh4, g->grad_scale, coeffs, grad, nc);
+    }
 }

@@ -67,7 +67,7 @@ static const shl__isa isas[] = {
         .interp_f = shl__interp_f_##isa,                                                               \
         .accumulate = shl__accumulate_##isa,                                                           \
         .poly_zh = shl__poly_zh_##isa,                                                                 \
-        .poly_zh_grad = shl__poly_zh_grad_##isa,                                                       \
+        .poly_grad_sh = shl__poly_grad_sh_##isa,                                                       \
     },
 #include "../simd/isa_list.h"
 #undef SHL_ISA

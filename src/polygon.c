@@ -626,11 +626,8 @@ int shl_polygon_grad(const shl_ctx *ctx, const double x[3], const double *verts,
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    double zh[4 * SHL__ZH_BLOCK]; /* value, then the 3 gradient blocks */
     shl__poly_geom_init(&g, x, verts, n);
-    ctx->isa->poly_zh_grad(&g, ctx->lmax, zh, zh + SHL__ZH_BLOCK);
-    shl__zh_to_sh_grad(ctx->lmax, zh, coeffs, grad, ctx->nc);
-    shl__poly_grad_unscale(&g, grad, 3 * ctx->nc);
+    ctx->isa->poly_grad_sh(&g, ctx->lmax, coeffs, grad, ctx->nc);
     return SHL_OK;
 }
 

@@ -72,10 +72,6 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh);
 /* Sparse ZH -> SH reconstruction (Wang 2018 Eq. 33) from the lobe table (zh_lobes.c);
  * zh laid out as above. */
 void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
-/* The same for 4 blocks at once, zh + a * SHL__ZH_BLOCK (a < 4): the value into
- * coeffs and the gradient blocks (layout of shl__poly_zh_grad_d, directly after
- * the value's) into grad + (a - 1) * nc. */
-void shl__zh_to_sh_grad(int lmax, const double *zh, double *coeffs, double *grad, int nc);
 /* shl__zh_to_sh of each of the SHL__ZH_MULTI interleaved blocks of z10 (layout above)
  * into out[b], bit for bit, the blocks side by side (polygon_hess.c). */
 void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI]);

@@ -121,12 +121,6 @@ void shl__zh_to_sh(int lmax, const double *zh, double *coeffs)
     to_sh(lmax, zh, NULL, 1, out);
 }
 
-void shl__zh_to_sh_grad(int lmax, const double *zh, double *coeffs, double *grad, int nc)
-{
-    double *const out[4] = {coeffs, grad, grad + nc, grad + 2 * nc};
-    to_sh(lmax, zh, NULL, 4, out);
-}
-
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs)
 {
     double tmp[SHL_NCOEFFS(SHL_LMAX_MAX)];

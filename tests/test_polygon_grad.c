@@ -82,21 +82,27 @@ SHL_TEST(polygon_grad_vs_reference_random)
 }
 
 /* shl_polygon_grad runs its context's ISA kernel: every ISA this CPU runs meets the
- * bound of polygon_grad_vs_reference_random (same cases, fewer). */
+ * bound of polygon_grad_vs_reference_random (same cases, fewer), and gives the scalar
+ * ISA's coefficients and gradient bit for bit (each lane and each reconstruction sum
+ * does the scalar arithmetic in the scalar order, without contraction). */
 SHL_TEST(polygon_grad_every_isa)
 {
     char note[256] = "";
+    static double c0[12][NC20], g0[12][3 * NC20];
     for (int i = 0; i < NISA; ++i) {
         shl_ctx *ctx = isa_ctx(isas[i], 20);
         if (!ctx) continue;
         rng_t r = {21};
         double worst = 0.0;
         for (int it = 0; it < 12; ++it) {
-            double v[18], x[3];
+            double v[18], x[3], c[NC20], g[3 * NC20];
             const int n = random_case(&r, it, v, x);
             const double e = grad_error(ctx, x, v, n, NULL);
             worst = fmax(worst, e);
             if (!(e <= 1e-8)) harness_fail(__FILE__, __LINE__, "%s case %d: %.3g", isas[i], it, e);
+            CHECK(shl_polygon_grad(ctx, x, v, n, i ? c : c0[it], i ? g : g0[it]) == SHL_OK);
+            if (i && (memcmp(c, c0[it], sizeof c) != 0 || memcmp(g, g0[it], sizeof g) != 0))
+                harness_fail(__FILE__, __LINE__, "%s case %d differs from %s", isas[i], it, isas[0]);
         }
         snprintf(note + strlen(note), sizeof note - strlen(note), "%s %.2e; ", isas[i], worst);
         shl_ctx_destroy(ctx);
