@@ -28,7 +28,7 @@
  * lambda_f - lambda_e = mu x (w_f - w_e), f_f - f_e = g . (w_f - w_e).  Every vector of (H2)
  * but mu lies in the arc's plane, spanned by w_f and lambda_f, so per edge, lobe and band
  * H_e = q_w S(mu, w_f) + q_l S(mu, lambda_f) + s_m mu mu^T (three scalars). */
-#include "polygon.h"
+#include "polygon_hess.h"
 #include "quad.h"
 #include "zh_tables.h"
 #include <math.h>
@@ -55,16 +55,9 @@ static double x_minus_sin(double x)
  * Taylor terms at the arc's midpoint fall like (T (l + 2) / 2)^k / k! <= 0.32^k / k! at
  * lmax 30: the NQ-point rule (exact for degree 2 NQ - 1) errs by < 0.32^16 / 16! < 1e-20
  * relative to (r/rho)^2 f^2 T, i.e. < 1e-16 of E_l. */
-enum { NQ = 8 };
+enum { NQ = SHL__HESS_NQ };
 #define NEAR_RADIAL 1e4
-
-/* Per-edge quantities of (H2)-(H6), scaled units. */
-typedef struct {
-    double g2, e0, ffp1, fe2, ff2, dff2, gw, gl, dlw, dll;
-    double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
-    int quad;                    /* E_l by the rule above */
-    double qc[NQ], qs[NQ], qf[NQ], qw[NQ]; /* its nodes t_j (cos, sin) and weights times f(t_j), f(t_j)^2 */
-} hess_edge;
+typedef shl__hess_edge hess_edge;
 
 static void sym6(const double a[3], const double b[3], double out[6])
 {
@@ -102,6 +95,21 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
     }
 }
 
+int shl__hess_edges_init(const shl__poly_geom *g, hess_edge *he)
+{
+    int any_radial = 0;
+    for (int e = 0; e < g->n; ++e) {
+        hess_edge_init(g, e, NULL, NULL, &he[e]);
+        any_radial |= he[e].g2 > NEAR_RADIAL * fmax(he[e].fe2, he[e].ff2);
+    }
+    if (any_radial) { /* rare: the rule's nodes only then */
+        double glx[NQ], glw[NQ];
+        shl__gauss_legendre(NQ, glx, glw);
+        for (int e = 0; e < g->n; ++e) hess_edge_init(g, e, glx, glw, &he[e]);
+    }
+    return any_radial;
+}
+
 enum { NL = 2 }; /* lobes side by side, as SHL__ZH_LANES in polygon_zh.h */
 
 void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int unscaled)
@@ -119,16 +127,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
     hess_edge he[SHL_MAX_VERTS];
-    double glx[NQ], glw[NQ];
-    int any_radial = 0;
-    for (int e = 0; e < n; ++e) {
-        hess_edge_init(g, e, NULL, NULL, &he[e]);
-        any_radial |= he[e].g2 > NEAR_RADIAL * fmax(he[e].fe2, he[e].ff2);
-    }
-    if (any_radial) { /* rare: the rule's nodes only then */
-        shl__gauss_legendre(NQ, glx, glw);
-        for (int e = 0; e < n; ++e) hess_edge_init(g, e, glx, glw, &he[e]);
-    }
+    shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += NL) {
         const double *lobe[NL];
         for (int k = 0; k < NL; ++k) lobe[k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1];
@@ -324,10 +323,10 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)]; /* ZH, gradient, Hessian interleaved (polygon.h) */
     shl__poly_geom_init(&g, x, verts, n);
     const int fold = shl__poly_hess_fold(&g);
-    shl__poly_zh_hess_d(&g, lmax, z10, fold);
+    ctx->isa->poly_zh_hess(&g, lmax, z10, fold); /* shl__poly_zh_hess_d across lobes, bit for bit */
     double *const out[SHL__ZH_MULTI] = {coeffs,       grad,         grad + nc,    grad + 2 * nc, hess,
                                         hess + nc,    hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    shl__zh_to_sh_multi(lmax, z10, out);
+    ctx->isa->zh_to_sh_multi(lmax, z10, out);
     if (!fold) {
         shl__poly_grad_unscale(&g, grad, 3 * nc);
         shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */

@@ -1,0 +1,24 @@
+/* Per-edge setup of the polygon Hessian (polygon_hess.c, derivation (H1)-(H6) there),
+ * shared by the scalar reference shl__poly_zh_hess_d and the kernels vectorized across
+ * lobes (simd/poly_hess_batch.h), which do per lane the reference's arithmetic. */
+#ifndef SHL_POLYGON_HESS_H
+#define SHL_POLYGON_HESS_H
+
+#include "polygon.h"
+
+/* Gauss-Legendre nodes of the rule for edges seen nearly end-on (polygon_hess.c, NEAR_RADIAL). */
+enum { SHL__HESS_NQ = 8 };
+
+/* Per-edge quantities of (H2)-(H6), scaled units. */
+typedef struct {
+    double g2, e0, ffp1, fe2, ff2, dff2, gw, gl, dlw, dll;
+    double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
+    int quad;                   /* E_l and I_l by the Gauss rule */
+    double qc[SHL__HESS_NQ], qs[SHL__HESS_NQ]; /* its nodes t_j (cos, sin) */
+    double qf[SHL__HESS_NQ], qw[SHL__HESS_NQ]; /* weights times f(t_j), f(t_j)^2 */
+} shl__hess_edge;
+
+/* The edges of g into he[0 .. g->n - 1]; returns 1 if any takes the Gauss rule. */
+int shl__hess_edges_init(const shl__poly_geom *g, shl__hess_edge *he);
+
+#endif
