@@ -42,7 +42,7 @@ static inline hv hv_dot(const hv u[3], const double p[3])
 
 /* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums:
  * il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of the gradient. */
-static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm, hv p, hv dp, hv ig, hv *hs,
+__attribute__((always_inline)) static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm, hv p, hv dp, hv ig, hv *hs,
                             hv *gs)
 {
     const hv al = hv_set1(h->dff2) * p + hv_set1(h->ff2) * dp, bl = hv_set1(h->fe2) * p; /* (H6) */
@@ -90,9 +90,11 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
             const hv s = a * hv_set1(g->sin_gamma[e]) - b * hv_set1(g->cos_gamma[e]);
             const hv b1 = a * hv_set1(g->sin_gamma[e]) + b * hv_set1(g->omc_gamma[e]); /* B_1, Wang Eq. 27 */
             const hv e0 = hv_set1(h->e0), g2 = hv_set1(h->g2), ffp1 = hv_set1(h->ffp1), te0 = hv_set1(2.0 * h->e0);
-            /* edges seen end-on: E_l, I_l of (H2) by the Gauss rule, and c M_l (H4) from them */
+            /* edges seen end-on: E_l, I_l of (H2) by the Gauss rule, and c M_l (H4) from them
+             * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
+            const int quad = h->quad;
             hv qe[SHL_LMAX_MAX + 1], qi[SHL_LMAX_MAX + 1], qm[SHL_LMAX_MAX + 1];
-            if (h->quad) {
+            if (quad) {
                 for (int l = 0; l <= lmax; ++l) qe[l] = qi[l] = hv_set1(0.0);
                 for (int j = 0; j < SHL__HESS_NQ; ++j) {
                     const hv z = a * hv_set1(h->qc[j]) + b * hv_set1(h->qs[j]);
@@ -107,7 +109,7 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
                 }
                 hv mm2 = hv_set1(0.0), mm1 = qe[0];
                 qm[0] = hv_set1(0.0);
-                if (lmax >= 1) qm[1] = c * qe[0];
+                qm[1] = c * qe[0]; /* unused at lmax 0 */
                 for (int l = 2; l <= lmax; ++l) {
                     const hv ml = hv_set1(2.0 * l - 1.0) * qe[l - 1] + mm2;
                     mm2 = mm1, mm1 = ml;
@@ -122,8 +124,10 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
             hv i1 = (v * gamma - (fp1 * da - i0 * a)) / hv_set1(2.0);
             hv j1 = i0, j2 = hv_set1(0.0), m2 = hv_set1(0.0), m1 = e0; /* M_0, M_1 = E_0 */
             hv e1 = (v * i0 - ffp1 * da + te0 * a + g2 * (b1 - gamma * a)) / hv_set1(3.0); /* E_1 */
-            hess_add(h, mu, h->quad ? qi[0] : i0, hv_set1(0.0), hv_set1(1.0), hv_set1(0.0), i0, hsum[0], gsum[0]);
-            if (lmax >= 1) hess_add(h, mu, h->quad ? qi[1] : i1, h->quad ? qm[1] : c * e0, a, da, i1, hsum[1], gsum[1]);
+            if (!quad) /* I_l and c M_l of (H2) from the recurrence */
+                qi[0] = i0, qm[0] = hv_set1(0.0), qi[1] = i1, qm[1] = c * e0;
+            hess_add(h, mu, qi[0], qm[0], hv_set1(1.0), hv_set1(0.0), i0, hsum[0], gsum[0]);
+            if (lmax >= 1) hess_add(h, mu, qi[1], qm[1], a, da, i1, hsum[1], gsum[1]);
             for (int l = 2; l <= lmax; ++l) {
                 const hv rl = hv_set1(inv_l[l]), lm1 = hv_set1(l - 1.0), tlm1 = hv_set1(2.0 * l - 1.0);
                 const hv pl = (tlm1 * a * p1 - lm1 * p2) * rl;                                      /* Wang Eq. 11 */
@@ -136,7 +140,8 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
                 const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
                 const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
                 bsum[l] += c * bl;
-                hess_add(h, mu, h->quad ? qi[l] : il, h->quad ? qm[l] : c * ml, pl, dpl, il, hsum[l], gsum[l]);
+                if (!quad) qi[l] = il, qm[l] = c * ml;
+                hess_add(h, mu, qi[l], qm[l], pl, dpl, il, hsum[l], gsum[l]);
                 p2 = p1, p1 = pl, dp2 = dp1, dp1 = dpl;
                 bb2 = bb1, bb1 = bl, d2 = d1, d1 = dl;
                 j2 = j1, j1 = jl, i1 = il;
@@ -171,31 +176,31 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
     }
 }
 
-/* Reconstruction of interleaved blocks, vectorized across them: NB blocks b0 .. b0+NB-1 of
- * each z10 record as an 8-lane vector (lanes >= NB zero) and, for NB = 10, a 2-lane one;
- * per lane the sums of shl__zh_to_sh in its order.  Generic vectors: any ISA runs them. */
+/* Reconstruction of interleaved blocks, vectorized across them: the blocks b0 .. b0+nb-1
+ * of each z10 record (nb = 10 or 6, b0 + nb = 10) as lanes of an 8-lane vector holding
+ * the record's last 8 entries and, for nb = 10, a 2-lane one holding its first 2; per
+ * lane the sums of shl__zh_to_sh in its order (the unused lanes are discarded).
+ * Generic vectors: any ISA runs them. */
 typedef double r8 __attribute__((vector_size(8 * sizeof(double))));
 typedef double r2 __attribute__((vector_size(2 * sizeof(double))));
 
-__attribute__((always_inline)) static inline void zh_to_sh_vec(int lmax, const double *z10, const int b0, const int nb,
+__attribute__((always_inline)) static inline void zh_to_sh_vec(int lmax, const double *z10, const int nb,
                                                                 double *const *out)
 {
-    const int nlo = nb < 8 ? nb : 8, nhi = nb - nlo; /* nhi is 0 or 2 */
+    enum { LO = SHL__ZH_MULTI - 8 }; /* lane j of the 8-lane vector: block LO + j */
+    const int hi_used = nb > 8;
     for (int l = 0; l <= lmax; ++l) {
         r8 even_lo[SHL_LMAX_MAX + 1], odd_lo[SHL_LMAX_MAX + 1];
         r2 even_hi[SHL_LMAX_MAX + 1], odd_hi[SHL_LMAX_MAX + 1];
         for (int k = 0; k <= l; ++k) { /* even_k = z_{2k-1} + z_{2k}, odd_{k-1} = z_{2k-1} - z_{2k} (k >= 1) */
-            double t1[8] = {0}, t2[8] = {0};
-            const double *z1 = z10 + SHL__Z10(lmax, k ? 2 * k - 1 : 0, l) + b0, *z2 = z10 + SHL__Z10(lmax, 2 * k, l) + b0;
+            const double *z1 = z10 + SHL__Z10(lmax, k ? 2 * k - 1 : 0, l), *z2 = z10 + SHL__Z10(lmax, 2 * k, l);
             r8 lo1, lo2;
             r2 hi1 = {0, 0}, hi2 = {0, 0};
-            memcpy(t1, z1, sizeof(double) * nlo);
-            memcpy(t2, z2, sizeof(double) * nlo);
-            memcpy(&lo1, t1, sizeof lo1);
-            memcpy(&lo2, t2, sizeof lo2);
-            if (nhi) {
-                memcpy(&hi1, z1 + 8, sizeof hi1);
-                memcpy(&hi2, z2 + 8, sizeof hi2);
+            memcpy(&lo1, z1 + LO, sizeof lo1);
+            memcpy(&lo2, z2 + LO, sizeof lo2);
+            if (hi_used) {
+                memcpy(&hi1, z1, sizeof hi1);
+                memcpy(&hi2, z2, sizeof hi2);
             }
             if (k == 0) {
                 even_lo[0] = lo1, even_hi[0] = hi1;
@@ -206,6 +211,8 @@ __attribute__((always_inline)) static inline void zh_to_sh_vec(int lmax, const d
         }
         const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
         const int base = l * (l + 1);
+        r8 res[2 * SHL_LMAX_MAX + 1];
+        r2 res_hi[2 * SHL_LMAX_MAX + 1];
         for (int m = -l; m <= l; ++m) {
             r8 lo = {0, 0, 0, 0, 0, 0, 0, 0};
             r2 hi = {0, 0};
@@ -213,28 +220,35 @@ __attribute__((always_inline)) static inline void zh_to_sh_vec(int lmax, const d
                 for (int k = 0; k <= l; ++k) {
                     const double w = we[m * (l + 1) + k];
                     lo += (r8){w, w, w, w, w, w, w, w} * even_lo[k];
-                    if (nhi) hi += (r2){w, w} * even_hi[k];
+                    if (hi_used) hi += (r2){w, w} * even_hi[k];
                 }
             else
                 for (int k = 0; k < l; ++k) {
                     const double w = wo[(-m - 1) * l + k];
                     lo += (r8){w, w, w, w, w, w, w, w} * odd_lo[k];
-                    if (nhi) hi += (r2){w, w} * odd_hi[k];
+                    if (hi_used) hi += (r2){w, w} * odd_hi[k];
                 }
-            double t[10];
-            memcpy(t, &lo, sizeof lo);
-            memcpy(t + 8, &hi, sizeof hi);
-            for (int b = 0; b < nb; ++b) out[b][base + m] = t[b];
+            res[m + l] = lo, res_hi[m + l] = hi;
+        }
+        /* the 2l + 1 results of each block to its contiguous row (storing each value as it is
+         * computed, gcc -O2 vectorizes the 10 stores into a scatter, 3x slower on AMD Zen) */
+        for (int b = 0; b < nb; ++b) {
+            const int j = SHL__ZH_MULTI - nb + b; /* record entry */
+            double *o = out[b] + base - l;
+            if (j < LO)
+                for (int m = 0; m <= 2 * l; ++m) o[m] = res_hi[m][j];
+            else
+                for (int m = 0; m <= 2 * l; ++m) o[m] = res[m][j - LO];
         }
     }
 }
 
 void SHL_ISA_SUFFIX(shl__zh_to_sh_multi)(int lmax, const double *z10, double *const *out)
 {
-    zh_to_sh_vec(lmax, z10, 0, SHL__ZH_MULTI, out);
+    zh_to_sh_vec(lmax, z10, SHL__ZH_MULTI, out);
 }
 
 void SHL_ISA_SUFFIX(shl__zh_to_sh_hess6)(int lmax, const double *z10, double *const *out)
 {
-    zh_to_sh_vec(lmax, z10, 4, 6, out);
+    zh_to_sh_vec(lmax, z10, 6, out);
 }
