@@ -52,9 +52,58 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
     for (int ax = 0; ax < 3; ++ax) gs[ax] += hv_set1(mu[ax]) * ig;
 }
 
-void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax, double *z10, int unscaled)
+/* The reconstruction (Wang 2018 Eq. 33) of the ten blocks b from their lobe rows
+ * z[(b (lmax + 1) + l) dp + d] (layout of shl__poly_hess below) into out[b] (nc values each),
+ * vectorized across orders m with the transposed weights, the blocks side by side (ten
+ * independent sums per weight vector load); per m the sums of shl__zh_to_sh in its order. */
+static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
 {
-    const int n = g->n, ndir = 2 * lmax + 1;
+    enum { NB = SHL__ZH_MULTI };
+    const int nc = (lmax + 1) * (lmax + 1);
+    const shl__zh_wt_table *wt = shl__zh_wt();
+    for (int l = 0; l <= lmax; ++l) {
+        double ev[SHL_LMAX_MAX + 1][NB], od[SHL_LMAX_MAX + 1][NB];
+        for (int b = 0; b < NB; ++b) {
+            const double *zl = z + (b * (lmax + 1) + l) * dp;
+            ev[0][b] = zl[0];
+            for (int k = 1; k <= l; ++k) ev[k][b] = zl[2 * k - 1] + zl[2 * k], od[k - 1][b] = zl[2 * k - 1] - zl[2 * k];
+        }
+        /* coefficients l(l+1) - l .. l(l+1) + l: odd part (m = l .. 1), then even (m = 0 .. l) */
+        for (int part = 0; part < 2; ++part) {
+            const int len = part ? l + 1 : l, pad = SHL__WT_PAD(len), at = l * l + (part ? l : 0);
+            const double *w = part ? wt->even + wt->even_ofs[l] : wt->odd + wt->odd_ofs[l];
+            const double(*f)[NB] = part ? (const double(*)[NB])ev : (const double(*)[NB])od;
+            for (int c = 0; c < len; c += ZW) {
+                hv acc[NB];
+#pragma GCC unroll 10
+                for (int b = 0; b < NB; ++b) acc[b] = hv_set1(0.0);
+                for (int k = 0; k < len; ++k) {
+                    hv wk;
+                    memcpy(&wk, w + k * pad + c, sizeof wk);
+#pragma GCC unroll 10
+                    for (int b = 0; b < NB; ++b) acc[b] += wk * hv_set1(f[k][b]);
+                }
+                /* a whole vector whenever it stays within the nc values: lanes past the row land on
+                 * coefficients written later (bands in order, the odd part first) */
+                for (int b = 0; b < NB; ++b)
+                    if (at + c + ZW <= nc)
+                        memcpy(out[b] + at + c, &acc[b], sizeof acc[b]);
+                    else {
+                        double t[ZW];
+                        memcpy(t, &acc[b], sizeof t);
+                        for (int q = 0; q < len - c; ++q) out[b][at + c + q] = t[q];
+                    }
+            }
+        }
+    }
+}
+
+void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out)
+{
+    const int n = g->n, ndir = 2 * lmax + 1, dp = (ndir + ZW - 1) / ZW * ZW;
+    /* z[(b (lmax + 1) + l) dp + d]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
+     * of lobe d, band l; lobes ndir .. dp - 1 repeat the last one */
+    double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
     const double sc = g->grad_scale[0] * g->grad_scale[1];
     double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
         s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
@@ -151,104 +200,58 @@ void SHL_ISA_SUFFIX(shl__poly_zh_hess)(const struct shl__poly_geom *g, int lmax,
         surf[0] = hv_set1(g->solid_angle);                 /* S_0 */
         if (lmax >= 1) surf[1] = bsum[0] / hv_set1(2.0); /* S_1, Wang Eq. 25 */
         for (int l = 2; l <= lmax; ++l) surf[l] = hv_set1(s_b[l]) * bsum[l - 1] + hv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
-        const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
         for (int l = 0; l <= lmax; ++l) {
-            double o[SHL__ZH_MULTI][ZW];
-            const hv ol = hv_set1(norm[l]) * surf[l]; /* Wang Eq. 13 */
-            memcpy(o[0], &ol, sizeof ol);
-            for (int ax = 0; ax < 3; ++ax) {
-                const hv t1 = hv_set1(gnorm[l]) * gsum[l][ax];
-                memcpy(o[1 + ax], &t1, sizeof t1);
-            }
-            for (int i = 0; i < 6; ++i) {
-                const hv t1 = hv_set1(hnorm[l]) * hsum[l][i]; /* (H2) */
-                memcpy(o[4 + i], &t1, sizeof t1);
-            }
-            for (int k = 0; k < cnt; ++k)
-                for (int bl = 0; bl < SHL__ZH_MULTI; ++bl) z10[SHL__Z10(lmax, d0 + k, l) + bl] = o[bl][k];
+            hv o[SHL__ZH_MULTI];
+            o[0] = hv_set1(norm[l]) * surf[l]; /* Wang Eq. 13 */
+            for (int ax = 0; ax < 3; ++ax) o[1 + ax] = hv_set1(gnorm[l]) * gsum[l][ax];
+            for (int i = 0; i < 6; ++i) o[4 + i] = hv_set1(hnorm[l]) * hsum[l][i]; /* (H2) */
+            for (int bl = 0; bl < SHL__ZH_MULTI; ++bl) memcpy(z + (bl * (lmax + 1) + l) * dp + d0, &o[bl], sizeof o[bl]);
         }
     }
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as shl__poly_zh_grad_d */
         double area[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
-            for (int l = 0; l <= lmax; ++l) z10[SHL__Z10(lmax, dir, l)] = area[dir * SHL__ZH_STRIDE + l];
+            for (int l = 0; l <= lmax; ++l) z[l * dp + dir] = area[dir * SHL__ZH_STRIDE + l];
     }
+    zh_to_sh_rows(lmax, z, dp, out);
 }
 
-/* Reconstruction of interleaved blocks, vectorized across them: the blocks b0 .. b0+nb-1
- * of each z10 record (nb = 10 or 6, b0 + nb = 10) as lanes of an 8-lane vector holding
- * the record's last 8 entries and, for nb = 10, a 2-lane one holding its first 2; per
- * lane the sums of shl__zh_to_sh in its order (the unused lanes are discarded).
- * Generic vectors: any ISA runs them. */
+/* shl__zh_to_sh_hess6 (the sphere's Hessian, z10 records of polygon.h), vectorized across
+ * the six blocks: the 8-lane vector of a record's last 8 entries, lanes 2 .. 7 the Hessian
+ * (generic vectors: any ISA runs them); per lane the sums of shl__zh_to_sh in its order. */
 typedef double r8 __attribute__((vector_size(8 * sizeof(double))));
-typedef double r2 __attribute__((vector_size(2 * sizeof(double))));
 
-__attribute__((always_inline)) static inline void zh_to_sh_vec(int lmax, const double *z10, const int nb,
-                                                                double *const *out)
+void SHL_ISA_SUFFIX(shl__zh_to_sh_hess6)(int lmax, const double *z10, double *const *out)
 {
-    enum { LO = SHL__ZH_MULTI - 8 }; /* lane j of the 8-lane vector: block LO + j */
-    const int hi_used = nb > 8;
+    enum { LO = SHL__ZH_MULTI - 8 }; /* lane j: record entry LO + j */
     for (int l = 0; l <= lmax; ++l) {
-        r8 even_lo[SHL_LMAX_MAX + 1], odd_lo[SHL_LMAX_MAX + 1];
-        r2 even_hi[SHL_LMAX_MAX + 1], odd_hi[SHL_LMAX_MAX + 1];
-        for (int k = 0; k <= l; ++k) { /* even_k = z_{2k-1} + z_{2k}, odd_{k-1} = z_{2k-1} - z_{2k} (k >= 1) */
-            const double *z1 = z10 + SHL__Z10(lmax, k ? 2 * k - 1 : 0, l), *z2 = z10 + SHL__Z10(lmax, 2 * k, l);
-            r8 lo1, lo2;
-            r2 hi1 = {0, 0}, hi2 = {0, 0};
-            memcpy(&lo1, z1 + LO, sizeof lo1);
-            memcpy(&lo2, z2 + LO, sizeof lo2);
-            if (hi_used) {
-                memcpy(&hi1, z1, sizeof hi1);
-                memcpy(&hi2, z2, sizeof hi2);
-            }
-            if (k == 0) {
-                even_lo[0] = lo1, even_hi[0] = hi1;
-                continue;
-            }
-            even_lo[k] = lo1 + lo2, odd_lo[k - 1] = lo1 - lo2;
-            even_hi[k] = hi1 + hi2, odd_hi[k - 1] = hi1 - hi2;
+        r8 even[SHL_LMAX_MAX + 1], odd[SHL_LMAX_MAX + 1];
+        memcpy(&even[0], z10 + SHL__Z10(lmax, 0, l) + LO, sizeof even[0]);
+        for (int k = 1; k <= l; ++k) { /* even_k = z_{2k-1} + z_{2k}, odd_{k-1} = z_{2k-1} - z_{2k} */
+            r8 z1, z2;
+            memcpy(&z1, z10 + SHL__Z10(lmax, 2 * k - 1, l) + LO, sizeof z1);
+            memcpy(&z2, z10 + SHL__Z10(lmax, 2 * k, l) + LO, sizeof z2);
+            even[k] = z1 + z2, odd[k - 1] = z1 - z2;
         }
         const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
-        const int base = l * (l + 1);
-        r8 res[2 * SHL_LMAX_MAX + 1];
-        r2 res_hi[2 * SHL_LMAX_MAX + 1];
+        r8 res[2 * SHL_LMAX_MAX + 1]; /* m + l */
         for (int m = -l; m <= l; ++m) {
-            r8 lo = {0, 0, 0, 0, 0, 0, 0, 0};
-            r2 hi = {0, 0};
+            r8 acc = {0, 0, 0, 0, 0, 0, 0, 0};
             if (m >= 0)
                 for (int k = 0; k <= l; ++k) {
                     const double w = we[m * (l + 1) + k];
-                    lo += (r8){w, w, w, w, w, w, w, w} * even_lo[k];
-                    if (hi_used) hi += (r2){w, w} * even_hi[k];
+                    acc += (r8){w, w, w, w, w, w, w, w} * even[k];
                 }
             else
                 for (int k = 0; k < l; ++k) {
                     const double w = wo[(-m - 1) * l + k];
-                    lo += (r8){w, w, w, w, w, w, w, w} * odd_lo[k];
-                    if (hi_used) hi += (r2){w, w} * odd_hi[k];
+                    acc += (r8){w, w, w, w, w, w, w, w} * odd[k];
                 }
-            res[m + l] = lo, res_hi[m + l] = hi;
+            res[m + l] = acc;
         }
-        /* the 2l + 1 results of each block to its contiguous row (storing each value as it is
-         * computed, gcc -O2 vectorizes the 10 stores into a scatter, 3x slower on AMD Zen) */
-        for (int b = 0; b < nb; ++b) {
-            const int j = SHL__ZH_MULTI - nb + b; /* record entry */
-            double *o = out[b] + base - l;
-            if (j < LO)
-                for (int m = 0; m <= 2 * l; ++m) o[m] = res_hi[m][j];
-            else
-                for (int m = 0; m <= 2 * l; ++m) o[m] = res[m][j - LO];
-        }
+        /* rows written after the band (gcc -O2 turns per-value stores into a scatter, slow on AMD Zen) */
+        for (int b = 0; b < 6; ++b)
+            for (int m = 0; m <= 2 * l; ++m) out[b][l * l + m] = res[m][4 - LO + b];
     }
-}
-
-void SHL_ISA_SUFFIX(shl__zh_to_sh_multi)(int lmax, const double *z10, double *const *out)
-{
-    zh_to_sh_vec(lmax, z10, SHL__ZH_MULTI, out);
-}
-
-void SHL_ISA_SUFFIX(shl__zh_to_sh_hess6)(int lmax, const double *z10, double *const *out)
-{
-    zh_to_sh_vec(lmax, z10, 6, out);
 }

@@ -68,8 +68,7 @@ static const shl__isa isas[] = {
         .accumulate = shl__accumulate_##isa,                                                           \
         .poly_zh = shl__poly_zh_##isa,                                                                 \
         .poly_zh_grad = shl__poly_zh_grad_##isa,                                                       \
-        .poly_zh_hess = shl__poly_zh_hess_##isa,                                                       \
-        .zh_to_sh_multi = shl__zh_to_sh_multi_##isa,                                                   \
+        .poly_hess = shl__poly_hess_##isa,                                                             \
         .zh_to_sh_hess6 = shl__zh_to_sh_hess6_##isa,                                                   \
     },
 #include "../simd/isa_list.h"

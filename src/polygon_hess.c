@@ -32,6 +32,7 @@
 #include "quad.h"
 #include "zh_tables.h"
 #include <math.h>
+#include <pthread.h>
 
 /* x - sin x, x in [0, 2 pi]: Taylor series below 1 (terms fall by >= 20x; 9 terms
  * leave < 1e-20 relative), direct above (sin 1 / 1 = 0.84: at most 3 bits lost). */
@@ -312,6 +313,30 @@ void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6])
     zh_to_sh_blocks(lmax, z10, 4, 6, out);
 }
 
+static shl__zh_wt_table wt;
+static pthread_once_t wt_once = PTHREAD_ONCE_INIT;
+
+static void wt_init(void)
+{
+    int eo = 0, oo = 0;
+    for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
+        const int pe = SHL__WT_PAD(l + 1), po = SHL__WT_PAD(l);
+        const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
+        wt.even_ofs[l] = eo, wt.odd_ofs[l] = oo;
+        for (int k = 0; k <= l; ++k)
+            for (int m = 0; m <= l; ++m) wt.even[eo + k * pe + m] = we[m * (l + 1) + k];
+        for (int k = 0; k < l; ++k)
+            for (int j = 0; j < l; ++j) wt.odd[oo + k * po + j] = wo[(l - j - 1) * l + k];
+        eo += (l + 1) * pe, oo += l * po;
+    }
+}
+
+const shl__zh_wt_table *shl__zh_wt(void)
+{
+    pthread_once(&wt_once, wt_init);
+    return &wt;
+}
+
 int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n, double *coeffs,
                      double *grad, double *hess)
 {
@@ -320,13 +345,12 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     const int lmax = ctx->lmax, nc = ctx->nc;
     shl__poly_geom g;
-    double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)]; /* ZH, gradient, Hessian interleaved (polygon.h) */
     shl__poly_geom_init(&g, x, verts, n);
     const int fold = shl__poly_hess_fold(&g);
-    ctx->isa->poly_zh_hess(&g, lmax, z10, fold); /* shl__poly_zh_hess_d across lobes, bit for bit */
     double *const out[SHL__ZH_MULTI] = {coeffs,       grad,         grad + nc,    grad + 2 * nc, hess,
                                         hess + nc,    hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    ctx->isa->zh_to_sh_multi(lmax, z10, out);
+    /* shl__poly_zh_hess_d and shl__zh_to_sh_multi across lobes and orders, bit for bit */
+    ctx->isa->poly_hess(&g, lmax, fold, out);
     if (!fold) {
         shl__poly_grad_unscale(&g, grad, 3 * nc);
         shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */

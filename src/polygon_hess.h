@@ -21,4 +21,18 @@ typedef struct {
 /* The edges of g into he[0 .. g->n - 1]; returns 1 if any takes the Gauss rule. */
 int shl__hess_edges_init(const shl__poly_geom *g, shl__hess_edge *he);
 
+/* Wang 2018 Eq. 33's weights (zh_tables.h) transposed, for the reconstruction vectorized
+ * across orders m (simd/poly_hess_batch.h).  Band l, with P(n) = n rounded up to 8 (zero
+ * padded): even row k <= l at even + even_ofs[l] + k P(l + 1) holds shl__zh_even_w's
+ * weight (m, k) at m <= l; odd row k < l at odd + odd_ofs[l] + k P(l) holds shl__zh_odd_w's
+ * weight (m, k) at j = l - m (m = l .. 1, the increasing addresses of coeff index l(l+1) - m). */
+#define SHL__WT_PAD(n) (((n) + 7) / 8 * 8)
+typedef struct {
+    int even_ofs[SHL_LMAX_MAX + 1], odd_ofs[SHL_LMAX_MAX + 1];
+    double even[SHL__ZH_EVEN_SIZE + 7 * (SHL_LMAX_MAX + 1) * (SHL_LMAX_MAX + 2) / 2]; /* sum (l+1) (P(l+1) - l - 1) */
+    double odd[SHL__ZH_ODD_SIZE + 7 * SHL_LMAX_MAX * (SHL_LMAX_MAX + 1) / 2];
+} shl__zh_wt_table;
+/* The table, built once (thread safe). */
+const shl__zh_wt_table *shl__zh_wt(void);
+
 #endif
