@@ -52,8 +52,13 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
     for (int ax = 0; ax < 3; ++ax) gs[ax] += hv_set1(mu[ax]) * ig;
 }
 
+/* Lobe order of the kernel's lanes: position p holds lobe 0 (p = 0), 2p - 1 (1 <= p <= lmax)
+ * or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are rows k and
+ * lmax + k: their sums and differences are vector operations. */
+static inline int lane_lobe(int lmax, int p) { return p == 0 ? 0 : p <= lmax ? 2 * p - 1 : 2 * (p - lmax); }
+
 /* The reconstruction (Wang 2018 Eq. 33) of the ten blocks b from their lobe rows
- * z[(b (lmax + 1) + l) dp + d] (layout of shl__poly_hess below) into out[b] (nc values each),
+ * z[(b (lmax + 1) + l) dp + p] (layout of shl__poly_hess below) into out[b] (nc values each),
  * vectorized across orders m with the transposed weights, the blocks side by side (ten
  * independent sums per weight vector load); per m the sums of shl__zh_to_sh in its order. */
 static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
@@ -62,17 +67,24 @@ static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
     const int nc = (lmax + 1) * (lmax + 1);
     const shl__zh_wt_table *wt = shl__zh_wt();
     for (int l = 0; l <= lmax; ++l) {
-        double ev[SHL_LMAX_MAX + 1][NB], od[SHL_LMAX_MAX + 1][NB];
+        double ev[NB][SHL_LMAX_MAX + 1 + ZW], od[NB][SHL_LMAX_MAX + 1 + ZW]; /* chunks of ZW may run past l */
         for (int b = 0; b < NB; ++b) {
             const double *zl = z + (b * (lmax + 1) + l) * dp;
-            ev[0][b] = zl[0];
-            for (int k = 1; k <= l; ++k) ev[k][b] = zl[2 * k - 1] + zl[2 * k], od[k - 1][b] = zl[2 * k - 1] - zl[2 * k];
+            ev[b][0] = zl[0];
+            for (int j = 0; j < l; j += ZW) { /* k = j + 1 .. : lobes 2k - 1 (row k) and 2k (row lmax + k) */
+                hv z1, z2;
+                memcpy(&z1, zl + 1 + j, sizeof z1);
+                memcpy(&z2, zl + lmax + 1 + j, sizeof z2);
+                const hv e = z1 + z2, o = z1 - z2;
+                memcpy(&ev[b][1 + j], &e, sizeof e);
+                memcpy(&od[b][j], &o, sizeof o);
+            }
         }
         /* coefficients l(l+1) - l .. l(l+1) + l: odd part (m = l .. 1), then even (m = 0 .. l) */
         for (int part = 0; part < 2; ++part) {
             const int len = part ? l + 1 : l, pad = SHL__WT_PAD(len), at = l * l + (part ? l : 0);
             const double *w = part ? wt->even + wt->even_ofs[l] : wt->odd + wt->odd_ofs[l];
-            const double(*f)[NB] = part ? (const double(*)[NB])ev : (const double(*)[NB])od;
+            double(*f)[SHL_LMAX_MAX + 1 + ZW] = part ? ev : od;
             for (int c = 0; c < len; c += ZW) {
                 hv acc[NB];
 #pragma GCC unroll 10
@@ -81,7 +93,7 @@ static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
                     hv wk;
                     memcpy(&wk, w + k * pad + c, sizeof wk);
 #pragma GCC unroll 10
-                    for (int b = 0; b < NB; ++b) acc[b] += wk * hv_set1(f[k][b]);
+                    for (int b = 0; b < NB; ++b) acc[b] += wk * hv_set1(f[b][k]);
                 }
                 /* a whole vector whenever it stays within the nc values: lanes past the row land on
                  * coefficients written later (bands in order, the odd part first) */
@@ -101,9 +113,10 @@ static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
 void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out)
 {
     const int n = g->n, ndir = 2 * lmax + 1, dp = (ndir + ZW - 1) / ZW * ZW;
-    /* z[(b (lmax + 1) + l) dp + d]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
-     * of lobe d, band l; lobes ndir .. dp - 1 repeat the last one */
-    double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
+    /* z[(b (lmax + 1) + l) dp + p]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
+     * of lobe lane_lobe(p), band l; positions ndir .. dp - 1 repeat the last one */
+    double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1) + ZW];
+    for (int k = 0; k < ZW; ++k) z[SHL__ZH_MULTI * (lmax + 1) * dp + k] = 0.0; /* read past the last row (zh_to_sh_rows) */
     const double sc = g->grad_scale[0] * g->grad_scale[1];
     double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
         s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
@@ -120,7 +133,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
         double t[3][ZW];
         for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1][c];
+            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[lane_lobe(lmax, d0 + k < ndir ? d0 + k : ndir - 1)][c];
         hv u[3];
         for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c], sizeof u[c]);
         hv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[SHL_LMAX_MAX + 1][3], hsum[SHL_LMAX_MAX + 1][6];
@@ -143,6 +156,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
              * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
             const int quad = h->quad;
             hv qe[SHL_LMAX_MAX + 1], qi[SHL_LMAX_MAX + 1], qm[SHL_LMAX_MAX + 1];
+            qi[1] = qm[1] = hv_set1(0.0); /* set below in both branches; gcc cannot see it at lmax 0 */
             if (quad) {
                 for (int l = 0; l <= lmax; ++l) qe[l] = qi[l] = hv_set1(0.0);
                 for (int j = 0; j < SHL__HESS_NQ; ++j) {
@@ -158,7 +172,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
                 }
                 hv mm2 = hv_set1(0.0), mm1 = qe[0];
                 qm[0] = hv_set1(0.0);
-                qm[1] = c * qe[0]; /* unused at lmax 0 */
+                if (lmax >= 1) qm[1] = c * qe[0];
                 for (int l = 2; l <= lmax; ++l) {
                     const hv ml = hv_set1(2.0 * l - 1.0) * qe[l - 1] + mm2;
                     mm2 = mm1, mm1 = ml;
@@ -212,7 +226,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
         double area[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, area);
         for (int dir = 0; dir < ndir; ++dir)
-            for (int l = 0; l <= lmax; ++l) z[l * dp + dir] = area[dir * SHL__ZH_STRIDE + l];
+            for (int l = 0; l <= lmax; ++l) z[l * dp + (dir & 1 ? (dir + 1) / 2 : dir ? lmax + dir / 2 : 0)] = area[dir * SHL__ZH_STRIDE + l];
     }
     zh_to_sh_rows(lmax, z, dp, out);
 }
