@@ -7,9 +7,10 @@
  * the reference's one-lobe arithmetic, so every ISA gives the reference's bits
  * (tests/test_hessian.c, hess_isa_kernels_match_reference).  The contraction
  * of (H2) is done inside the band loop instead of after it (the same sums, edges in
- * the same order).  A partial last block repeats its last lobe.  Also the ZH -> SH
- * reconstruction (Wang 2018 Eq. 33) of the interleaved blocks, vectorized across
- * blocks, the same sums in the same order as shl__zh_to_sh. */
+ * the same order).  A partial last block repeats its last lobe.  The ZH -> SH
+ * reconstruction (Wang 2018 Eq. 33) of the ten blocks (shl__zh_to_sh_multi) follows in
+ * the same call, vectorized across orders m, and the sphere's six-block one
+ * (shl__zh_to_sh_hess6) across blocks: the same sums in the same order as shl__zh_to_sh. */
 #include "../src/polygon_hess.h"
 #include "kernel_api.h"
 #include <string.h>
@@ -42,8 +43,8 @@ static inline hv hv_dot(const hv u[3], const double p[3])
 
 /* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums:
  * il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of the gradient. */
-__attribute__((always_inline)) static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm, hv p, hv dp, hv ig, hv *hs,
-                            hv *gs)
+__attribute__((always_inline)) static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm,
+                                                            hv p, hv dp, hv ig, hv *hs, hv *gs)
 {
     const hv al = hv_set1(h->dff2) * p + hv_set1(h->ff2) * dp, bl = hv_set1(h->fe2) * p; /* (H6) */
     const hv qw = il * hv_set1(2.0 * h->gw) - bl * hv_set1(h->dlw);
