@@ -1,6 +1,6 @@
 /* Hessian cost (issue 19): shl_polygon_hess / shl_polygon and shl_sphere_hess / shl_sphere,
  * with the gradient calls for reference, at lmax 4, 8, 14, 30, all ratios from one run
- * (one core, scalar double; minimum of 31 timed repetitions of ~2 ms each).  The issue's
+ * (one core, double, the context's default ISA, printed; minimum of 31 timed repetitions of ~2 ms each).  The issue's
  * target is shl_polygon_hess <= 2.5x shl_polygon at lmax 8.  Also one light set of
  * 4 quads and 2 spheres: shl_lights_eval_hess / shl_lights_eval (with gradients).
  * CSV: build/bench/bench_hess.csv (-o overrides); --help. */
@@ -60,7 +60,7 @@ int main(int argc, char **argv)
     const bench_opt opts[] = {{"-o", "--csv", "FILE", &csv_path, "CSV output (default build/bench/bench_hess.csv)"}};
     const bench_cli cli = {
         "bench_hess", "[-o FILE]",
-        "Cost of the analytic SH Hessians (issue 19), one core, scalar double: shl_polygon_hess against\n"
+        "Cost of the analytic SH Hessians (issue 19), one core, double, the default ISA: shl_polygon_hess against\n"
         "shl_polygon and shl_polygon_grad (triangle), shl_sphere_hess against shl_sphere and shl_sphere_grad,\n"
         "at lmax 4, 8, 14, 30, and a light set (4 quads, 2 spheres) with shl_lights_eval_hess against\n"
         "shl_lights_eval with gradients.  Ratios within one run.  About 6 s on an idle 2-core machine.\n"
@@ -73,6 +73,9 @@ int main(int argc, char **argv)
     bench_loadavg(load, sizeof load);
     bench_print_machine(stdout);
     printf("load average at start: %s\n", load);
+    shl_ctx *ictx;
+    if (shl_ctx_create(2, &ictx) == SHL_OK) printf("ISA of the kernels (default): %s\n", shl_ctx_isa(ictx));
+    shl_ctx_destroy(ictx);
     fprintf(csv, "light,lmax,ns_coeffs,ns_grad,ns_hess,hess_over_coeffs,hess_over_grad\n");
     static job j;
     const double tri[9] = {-0.4, -0.3, 1.2, 0.6, -0.2, 1.0, 0.1, 0.7, 1.4};

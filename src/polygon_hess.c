@@ -28,10 +28,11 @@
  * lambda_f - lambda_e = mu x (w_f - w_e), f_f - f_e = g . (w_f - w_e).  Every vector of (H2)
  * but mu lies in the arc's plane, spanned by w_f and lambda_f, so per edge, lobe and band
  * H_e = q_w S(mu, w_f) + q_l S(mu, lambda_f) + s_m mu mu^T (three scalars). */
-#include "polygon.h"
+#include "polygon_hess.h"
 #include "quad.h"
 #include "zh_tables.h"
 #include <math.h>
+#include <pthread.h>
 
 /* x - sin x, x in [0, 2 pi]: Taylor series below 1 (terms fall by >= 20x; 9 terms
  * leave < 1e-20 relative), direct above (sin 1 / 1 = 0.84: at most 3 bits lost). */
@@ -55,16 +56,9 @@ static double x_minus_sin(double x)
  * Taylor terms at the arc's midpoint fall like (T (l + 2) / 2)^k / k! <= 0.32^k / k! at
  * lmax 30: the NQ-point rule (exact for degree 2 NQ - 1) errs by < 0.32^16 / 16! < 1e-20
  * relative to (r/rho)^2 f^2 T, i.e. < 1e-16 of E_l. */
-enum { NQ = 8 };
+enum { NQ = SHL__HESS_NQ };
 #define NEAR_RADIAL 1e4
-
-/* Per-edge quantities of (H2)-(H6), scaled units. */
-typedef struct {
-    double g2, e0, ffp1, fe2, ff2, dff2, gw, gl, dlw, dll;
-    double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
-    int quad;                    /* E_l by the rule above */
-    double qc[NQ], qs[NQ], qf[NQ], qw[NQ]; /* its nodes t_j (cos, sin) and weights times f(t_j), f(t_j)^2 */
-} hess_edge;
+typedef shl__hess_edge hess_edge;
 
 static void sym6(const double a[3], const double b[3], double out[6])
 {
@@ -102,6 +96,21 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
     }
 }
 
+int shl__hess_edges_init(const shl__poly_geom *g, hess_edge *he)
+{
+    int any_radial = 0;
+    for (int e = 0; e < g->n; ++e) {
+        hess_edge_init(g, e, NULL, NULL, &he[e]);
+        any_radial |= he[e].g2 > NEAR_RADIAL * fmax(he[e].fe2, he[e].ff2);
+    }
+    if (any_radial) { /* rare: the rule's nodes only then */
+        double glx[NQ], glw[NQ];
+        shl__gauss_legendre(NQ, glx, glw);
+        for (int e = 0; e < g->n; ++e) hess_edge_init(g, e, glx, glw, &he[e]);
+    }
+    return any_radial;
+}
+
 enum { NL = 2 }; /* lobes side by side, as SHL__ZH_LANES in polygon_zh.h */
 
 void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int unscaled)
@@ -119,16 +128,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
     hess_edge he[SHL_MAX_VERTS];
-    double glx[NQ], glw[NQ];
-    int any_radial = 0;
-    for (int e = 0; e < n; ++e) {
-        hess_edge_init(g, e, NULL, NULL, &he[e]);
-        any_radial |= he[e].g2 > NEAR_RADIAL * fmax(he[e].fe2, he[e].ff2);
-    }
-    if (any_radial) { /* rare: the rule's nodes only then */
-        shl__gauss_legendre(NQ, glx, glw);
-        for (int e = 0; e < n; ++e) hess_edge_init(g, e, glx, glw, &he[e]);
-    }
+    shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += NL) {
         const double *lobe[NL];
         for (int k = 0; k < NL; ++k) lobe[k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1];
@@ -313,6 +313,30 @@ void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6])
     zh_to_sh_blocks(lmax, z10, 4, 6, out);
 }
 
+static shl__zh_wt_table wt;
+static pthread_once_t wt_once = PTHREAD_ONCE_INIT;
+
+static void wt_init(void)
+{
+    int eo = 0, oo = 0;
+    for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
+        const int pe = SHL__WT_PAD(l + 1), po = SHL__WT_PAD(l);
+        const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
+        wt.even_ofs[l] = eo, wt.odd_ofs[l] = oo;
+        for (int k = 0; k <= l; ++k)
+            for (int m = 0; m <= l; ++m) wt.even[eo + k * pe + m] = we[m * (l + 1) + k];
+        for (int k = 0; k < l; ++k)
+            for (int j = 0; j < l; ++j) wt.odd[oo + k * po + j] = wo[(l - j - 1) * l + k];
+        eo += (l + 1) * pe, oo += l * po;
+    }
+}
+
+const shl__zh_wt_table *shl__zh_wt(void)
+{
+    pthread_once(&wt_once, wt_init);
+    return &wt;
+}
+
 int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts, int n, double *coeffs,
                      double *grad, double *hess)
 {
@@ -321,13 +345,12 @@ int shl_polygon_hess(const shl_ctx *ctx, const double x[3], const double *verts,
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     const int lmax = ctx->lmax, nc = ctx->nc;
     shl__poly_geom g;
-    double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)]; /* ZH, gradient, Hessian interleaved (polygon.h) */
     shl__poly_geom_init(&g, x, verts, n);
     const int fold = shl__poly_hess_fold(&g);
-    shl__poly_zh_hess_d(&g, lmax, z10, fold);
     double *const out[SHL__ZH_MULTI] = {coeffs,       grad,         grad + nc,    grad + 2 * nc, hess,
                                         hess + nc,    hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    shl__zh_to_sh_multi(lmax, z10, out);
+    /* shl__poly_zh_hess_d and shl__zh_to_sh_multi across lobes and orders, bit for bit */
+    ctx->isa->poly_hess(&g, lmax, fold, out);
     if (!fold) {
         shl__poly_grad_unscale(&g, grad, 3 * nc);
         shl__poly_grad_unscale(&g, hess, 6 * nc); /* 2^-2E: twice */

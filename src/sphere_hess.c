@@ -105,6 +105,6 @@ int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3
     double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)];
     shl__sphere_zh_hess(&g, lmax, z10);
     double *const out[6] = {hess, hess + nc, hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    shl__zh_to_sh_hess6(lmax, z10, out);
+    ctx->isa->zh_to_sh_hess6(lmax, z10, out); /* shl__zh_to_sh_hess6 vectorized, bit for bit */
     return SHL_OK;
 }

@@ -1,0 +1,272 @@
+/* Single-call polygon Hessians (shl_polygon_hess) vectorized ACROSS LOBES, as
+ * simd/poly_zh_batch.h does for coefficients and gradients: the recurrence of the
+ * scalar reference shl__poly_zh_hess_d (src/polygon_hess.c, derivation (H1)-(H6)
+ * there) for ZW lobes side by side in one vector, ZW = the ISA's double width
+ * SHL_VDLEN (8 on AVX-512, 4 on AVX2), at least 2.  Generic vector types, no fused
+ * multiply-add (gcc's C11 mode and the clang pragma below): each lane does exactly
+ * the reference's one-lobe arithmetic, so every ISA gives the reference's bits
+ * (tests/test_hessian.c, hess_isa_kernels_match_reference).  The contraction
+ * of (H2) is done inside the band loop instead of after it (the same sums, edges in
+ * the same order).  A partial last block repeats its last lobe.  The ZH -> SH
+ * reconstruction (Wang 2018 Eq. 33) of the ten blocks (shl__zh_to_sh_multi) follows in
+ * the same call, vectorized across orders m, and the sphere's six-block one
+ * (shl__zh_to_sh_hess6) across blocks: the same sums in the same order as shl__zh_to_sh. */
+#include "../src/polygon_hess.h"
+#include "kernel_api.h"
+#include <string.h>
+
+#ifdef __clang__
+#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
+#endif
+
+#if defined(SHL_VDLEN) && SHL_VDLEN > 2
+#define ZW SHL_VDLEN
+#else
+#define ZW 2
+#endif
+typedef double hv __attribute__((vector_size(ZW * sizeof(double))));
+
+static inline hv hv_set1(double x)
+{
+    double t[ZW];
+    for (int k = 0; k < ZW; ++k) t[k] = x;
+    hv v;
+    memcpy(&v, t, sizeof v);
+    return v;
+}
+
+/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of shl__dot3 */
+static inline hv hv_dot(const hv u[3], const double p[3])
+{
+    return u[0] * hv_set1(p[0]) + u[1] * hv_set1(p[1]) + u[2] * hv_set1(p[2]);
+}
+
+/* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums:
+ * il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of the gradient. */
+__attribute__((always_inline)) static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm,
+                                                            hv p, hv dp, hv ig, hv *hs, hv *gs)
+{
+    const hv al = hv_set1(h->dff2) * p + hv_set1(h->ff2) * dp, bl = hv_set1(h->fe2) * p; /* (H6) */
+    const hv qw = il * hv_set1(2.0 * h->gw) - bl * hv_set1(h->dlw);
+    const hv ql = il * hv_set1(2.0 * h->gl) - al - bl * hv_set1(h->dll);
+    for (int i = 0; i < 6; ++i) hs[i] += qw * hv_set1(h->tw[i]) + ql * hv_set1(h->tl[i]) - sm * hv_set1(h->tm[i]);
+    for (int ax = 0; ax < 3; ++ax) gs[ax] += hv_set1(mu[ax]) * ig;
+}
+
+/* Lobe order of the kernel's lanes: position p holds lobe 0 (p = 0), 2p - 1 (1 <= p <= lmax)
+ * or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are rows k and
+ * lmax + k: their sums and differences are vector operations. */
+static inline int lane_lobe(int lmax, int p) { return p == 0 ? 0 : p <= lmax ? 2 * p - 1 : 2 * (p - lmax); }
+
+/* The reconstruction (Wang 2018 Eq. 33) of the ten blocks b from their lobe rows
+ * z[(b (lmax + 1) + l) dp + p] (layout of shl__poly_hess below) into out[b] (nc values each),
+ * vectorized across orders m with the transposed weights, the blocks side by side (ten
+ * independent sums per weight vector load); per m the sums of shl__zh_to_sh in its order. */
+static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
+{
+    enum { NB = SHL__ZH_MULTI };
+    const int nc = (lmax + 1) * (lmax + 1);
+    const shl__zh_wt_table *wt = shl__zh_wt();
+    for (int l = 0; l <= lmax; ++l) {
+        double ev[NB][SHL_LMAX_MAX + 1 + ZW], od[NB][SHL_LMAX_MAX + 1 + ZW]; /* chunks of ZW may run past l */
+        for (int b = 0; b < NB; ++b) {
+            const double *zl = z + (b * (lmax + 1) + l) * dp;
+            ev[b][0] = zl[0];
+            for (int j = 0; j < l; j += ZW) { /* k = j + 1 .. : lobes 2k - 1 (row k) and 2k (row lmax + k) */
+                hv z1, z2;
+                memcpy(&z1, zl + 1 + j, sizeof z1);
+                memcpy(&z2, zl + lmax + 1 + j, sizeof z2);
+                const hv e = z1 + z2, o = z1 - z2;
+                memcpy(&ev[b][1 + j], &e, sizeof e);
+                memcpy(&od[b][j], &o, sizeof o);
+            }
+        }
+        /* coefficients l(l+1) - l .. l(l+1) + l: odd part (m = l .. 1), then even (m = 0 .. l) */
+        for (int part = 0; part < 2; ++part) {
+            const int len = part ? l + 1 : l, pad = SHL__WT_PAD(len), at = l * l + (part ? l : 0);
+            const double *w = part ? wt->even + wt->even_ofs[l] : wt->odd + wt->odd_ofs[l];
+            double(*f)[SHL_LMAX_MAX + 1 + ZW] = part ? ev : od;
+            for (int c = 0; c < len; c += ZW) {
+                hv acc[NB];
+#pragma GCC unroll 10
+                for (int b = 0; b < NB; ++b) acc[b] = hv_set1(0.0);
+                for (int k = 0; k < len; ++k) {
+                    hv wk;
+                    memcpy(&wk, w + k * pad + c, sizeof wk);
+#pragma GCC unroll 10
+                    for (int b = 0; b < NB; ++b) acc[b] += wk * hv_set1(f[b][k]);
+                }
+                /* a whole vector whenever it stays within the nc values: lanes past the row land on
+                 * coefficients written later (bands in order, the odd part first) */
+                for (int b = 0; b < NB; ++b)
+                    if (at + c + ZW <= nc)
+                        memcpy(out[b] + at + c, &acc[b], sizeof acc[b]);
+                    else {
+                        double t[ZW];
+                        memcpy(t, &acc[b], sizeof t);
+                        for (int q = 0; q < len - c; ++q) out[b][at + c + q] = t[q];
+                    }
+            }
+        }
+    }
+}
+
+void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out)
+{
+    const int n = g->n, ndir = 2 * lmax + 1, dp = (ndir + ZW - 1) / ZW * ZW;
+    /* z[(b (lmax + 1) + l) dp + p]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
+     * of lobe lane_lobe(p), band l; positions ndir .. dp - 1 repeat the last one */
+    double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1) + ZW];
+    for (int k = 0; k < ZW; ++k) z[SHL__ZH_MULTI * (lmax + 1) * dp + k] = 0.0; /* read past the last row (zh_to_sh_rows) */
+    const double sc = g->grad_scale[0] * g->grad_scale[1];
+    double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
+        s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
+    for (int l = 0; l <= lmax; ++l) { /* as the reference */
+        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
+        gnorm[l] = unscaled ? norm[l] * sc : norm[l];
+        hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
+        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));
+        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
+    }
+    for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
+    shl__hess_edge he[SHL_MAX_VERTS];
+    shl__hess_edges_init(g, he);
+    for (int d0 = 0; d0 < ndir; d0 += ZW) {
+        double t[3][ZW];
+        for (int k = 0; k < ZW; ++k)
+            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[lane_lobe(lmax, d0 + k < ndir ? d0 + k : ndir - 1)][c];
+        hv u[3];
+        for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c], sizeof u[c]);
+        hv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[SHL_LMAX_MAX + 1][3], hsum[SHL_LMAX_MAX + 1][6];
+        for (int l = 0; l <= lmax; ++l) {
+            bsum[l] = hv_set1(0.0);
+            for (int a = 0; a < 3; ++a) gsum[l][a] = hv_set1(0.0);
+            for (int i = 0; i < 6; ++i) hsum[l][i] = hv_set1(0.0);
+        }
+        for (int e = 0; e < n; ++e) {
+            const int f = (e + 1 == n) ? 0 : e + 1;
+            const shl__hess_edge *h = &he[e];
+            const double *mu = g->mu[e];
+            const hv gamma = hv_set1(g->gamma[e]), i0 = hv_set1(g->f_integral[e]), fp1 = hv_set1(g->fprime1[e]);
+            const hv a = hv_dot(u, g->w[e]), b = hv_dot(u, g->lam[e]), c = hv_dot(u, mu), c2 = c * c;
+            const hv af = hv_dot(u, g->w[f]), da = hv_dot(u, g->dw[e]), v = hv_dot(u, g->gvec[e]);
+            const hv s = a * hv_set1(g->sin_gamma[e]) - b * hv_set1(g->cos_gamma[e]);
+            const hv b1 = a * hv_set1(g->sin_gamma[e]) + b * hv_set1(g->omc_gamma[e]); /* B_1, Wang Eq. 27 */
+            const hv e0 = hv_set1(h->e0), g2 = hv_set1(h->g2), ffp1 = hv_set1(h->ffp1), te0 = hv_set1(2.0 * h->e0);
+            /* edges seen end-on: E_l, I_l of (H2) by the Gauss rule, and c M_l (H4) from them
+             * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
+            const int quad = h->quad;
+            hv qe[SHL_LMAX_MAX + 1], qi[SHL_LMAX_MAX + 1], qm[SHL_LMAX_MAX + 1];
+            qi[1] = qm[1] = hv_set1(0.0); /* set below in both branches; gcc cannot see it at lmax 0 */
+            if (quad) {
+                for (int l = 0; l <= lmax; ++l) qe[l] = qi[l] = hv_set1(0.0);
+                for (int j = 0; j < SHL__HESS_NQ; ++j) {
+                    const hv z = a * hv_set1(h->qc[j]) + b * hv_set1(h->qs[j]);
+                    const hv wq = hv_set1(h->qw[j]), wf = hv_set1(h->qf[j]);
+                    hv q0 = hv_set1(0.0), q1 = hv_set1(1.0); /* P_{l-1}, P_l at l = 0 */
+                    for (int l = 0; l <= lmax; ++l) {
+                        qe[l] += wq * q1;
+                        qi[l] += wf * q1;
+                        const hv q2 = (hv_set1(2.0 * l + 1.0) * z * q1 - hv_set1(l) * q0) * hv_set1(inv_l[l + 1]);
+                        q0 = q1, q1 = q2;
+                    }
+                }
+                hv mm2 = hv_set1(0.0), mm1 = qe[0];
+                qm[0] = hv_set1(0.0);
+                if (lmax >= 1) qm[1] = c * qe[0];
+                for (int l = 2; l <= lmax; ++l) {
+                    const hv ml = hv_set1(2.0 * l - 1.0) * qe[l - 1] + mm2;
+                    mm2 = mm1, mm1 = ml;
+                    qm[l] = c * ml;
+                }
+            }
+            hv p1 = a, p2 = hv_set1(1.0), dp1 = da, dp2 = hv_set1(0.0);
+            hv bb1 = b1, bb2 = gamma, d1 = gamma, d2 = hv_set1(0.0);
+            bsum[0] += c * gamma;
+            if (lmax >= 2) bsum[1] += c * b1;
+            /* l = 0 and 1 of Wu's I, J and of (H3)-(H4) */
+            hv i1 = (v * gamma - (fp1 * da - i0 * a)) / hv_set1(2.0);
+            hv j1 = i0, j2 = hv_set1(0.0), m2 = hv_set1(0.0), m1 = e0; /* M_0, M_1 = E_0 */
+            hv e1 = (v * i0 - ffp1 * da + te0 * a + g2 * (b1 - gamma * a)) / hv_set1(3.0); /* E_1 */
+            if (!quad) /* I_l and c M_l of (H2) from the recurrence */
+                qi[0] = i0, qm[0] = hv_set1(0.0), qi[1] = i1, qm[1] = c * e0;
+            hess_add(h, mu, qi[0], qm[0], hv_set1(1.0), hv_set1(0.0), i0, hsum[0], gsum[0]);
+            if (lmax >= 1) hess_add(h, mu, qi[1], qm[1], a, da, i1, hsum[1], gsum[1]);
+            for (int l = 2; l <= lmax; ++l) {
+                const hv rl = hv_set1(inv_l[l]), lm1 = hv_set1(l - 1.0), tlm1 = hv_set1(2.0 * l - 1.0);
+                const hv pl = (tlm1 * a * p1 - lm1 * p2) * rl;                                      /* Wang Eq. 11 */
+                const hv dl = tlm1 * bb1 + d2;                                                      /* Wang Eq. 32 */
+                const hv dpl = (tlm1 * (af * dp1 + da * p1) - lm1 * dp2) * rl;
+                const hv il = (v * dl - j1 - (fp1 * dpl - i0 * pl)) * hv_set1(inv_l[l + 1]);      /* Wu I_l */
+                const hv jl = tlm1 * i1 + j2;
+                const hv cl = (b1 * p1 + s * dp1 - c2 * d1 + lm1 * bb2) * rl;                     /* Eq. 31 */
+                const hv bl = (tlm1 * cl - lm1 * bb2) * rl;                                         /* Eq. 30 */
+                const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
+                const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
+                bsum[l] += c * bl;
+                if (!quad) qi[l] = il, qm[l] = c * ml;
+                hess_add(h, mu, qi[l], qm[l], pl, dpl, il, hsum[l], gsum[l]);
+                p2 = p1, p1 = pl, dp2 = dp1, dp1 = dpl;
+                bb2 = bb1, bb1 = bl, d2 = d1, d1 = dl;
+                j2 = j1, j1 = jl, i1 = il;
+                m2 = m1, m1 = ml, e1 = el;
+            }
+        }
+        surf[0] = hv_set1(g->solid_angle);                 /* S_0 */
+        if (lmax >= 1) surf[1] = bsum[0] / hv_set1(2.0); /* S_1, Wang Eq. 25 */
+        for (int l = 2; l <= lmax; ++l) surf[l] = hv_set1(s_b[l]) * bsum[l - 1] + hv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
+        for (int l = 0; l <= lmax; ++l) {
+            hv o[SHL__ZH_MULTI];
+            o[0] = hv_set1(norm[l]) * surf[l]; /* Wang Eq. 13 */
+            for (int ax = 0; ax < 3; ++ax) o[1 + ax] = hv_set1(gnorm[l]) * gsum[l][ax];
+            for (int i = 0; i < 6; ++i) o[4 + i] = hv_set1(hnorm[l]) * hsum[l][i]; /* (H2) */
+            for (int bl = 0; bl < SHL__ZH_MULTI; ++bl) memcpy(z + (bl * (lmax + 1) + l) * dp + d0, &o[bl], sizeof o[bl]);
+        }
+    }
+    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as shl__poly_zh_grad_d */
+        double area[SHL__ZH_BLOCK];
+        shl__poly_zh_area(g, lmax, area);
+        for (int dir = 0; dir < ndir; ++dir)
+            for (int l = 0; l <= lmax; ++l) z[l * dp + (dir & 1 ? (dir + 1) / 2 : dir ? lmax + dir / 2 : 0)] = area[dir * SHL__ZH_STRIDE + l];
+    }
+    zh_to_sh_rows(lmax, z, dp, out);
+}
+
+/* shl__zh_to_sh_hess6 (the sphere's Hessian, z10 records of polygon.h), vectorized across
+ * the six blocks: the 8-lane vector of a record's last 8 entries, lanes 2 .. 7 the Hessian
+ * (generic vectors: any ISA runs them); per lane the sums of shl__zh_to_sh in its order. */
+typedef double r8 __attribute__((vector_size(8 * sizeof(double))));
+
+void SHL_ISA_SUFFIX(shl__zh_to_sh_hess6)(int lmax, const double *z10, double *const *out)
+{
+    enum { LO = SHL__ZH_MULTI - 8 }; /* lane j: record entry LO + j */
+    for (int l = 0; l <= lmax; ++l) {
+        r8 even[SHL_LMAX_MAX + 1], odd[SHL_LMAX_MAX + 1];
+        memcpy(&even[0], z10 + SHL__Z10(lmax, 0, l) + LO, sizeof even[0]);
+        for (int k = 1; k <= l; ++k) { /* even_k = z_{2k-1} + z_{2k}, odd_{k-1} = z_{2k-1} - z_{2k} */
+            r8 z1, z2;
+            memcpy(&z1, z10 + SHL__Z10(lmax, 2 * k - 1, l) + LO, sizeof z1);
+            memcpy(&z2, z10 + SHL__Z10(lmax, 2 * k, l) + LO, sizeof z2);
+            even[k] = z1 + z2, odd[k - 1] = z1 - z2;
+        }
+        const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
+        r8 res[2 * SHL_LMAX_MAX + 1]; /* m + l */
+        for (int m = -l; m <= l; ++m) {
+            r8 acc = {0, 0, 0, 0, 0, 0, 0, 0};
+            if (m >= 0)
+                for (int k = 0; k <= l; ++k) {
+                    const double w = we[m * (l + 1) + k];
+                    acc += (r8){w, w, w, w, w, w, w, w} * even[k];
+                }
+            else
+                for (int k = 0; k < l; ++k) {
+                    const double w = wo[(-m - 1) * l + k];
+                    acc += (r8){w, w, w, w, w, w, w, w} * odd[k];
+                }
+            res[m + l] = acc;
+        }
+        /* rows written after the band (gcc -O2 turns per-value stores into a scatter, slow on AMD Zen) */
+        for (int b = 0; b < 6; ++b)
+            for (int m = 0; m <= 2 * l; ++m) out[b][l * l + m] = res[m][4 - LO + b];
+    }
+}
