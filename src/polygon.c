@@ -6,6 +6,7 @@
 #include "zh_tables.h"
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <string.h>
 
 static inline int imax(int a, int b) { return a > b ? a : b; }
@@ -204,8 +205,10 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         num_i[i] = num, den_i[i] = den, dot_i[i] = dot;
     }
     /* Terms of one sign: the direct sum's magnitude sum is |total|, the least any form
-     * can have, so the split below could not be chosen for a smaller one. */
-    if (foot_near_boundary || npos == 0 || nneg == 0) return fabs(total);
+     * can have, so the split below could not be chosen for a smaller one.  Within 4x
+     * of that least (the direct sum loses at most 2 bits to cancellation, as at a
+     * moderate height) the split's n more atan2 calls are not spent either. */
+    if (foot_near_boundary || npos == 0 || nneg == 0 || abs_total <= 4.0 * fabs(total)) return fabs(total);
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double num = num_i[i], den = den_i[i], dot = dot_i[i], si = s_i[i], sj = s_i[j];
@@ -258,7 +261,9 @@ static double fan_distance(const double (*rel)[3], int n, const double nrm[3])
     return best;
 }
 
-void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
+/* with_grad = 0: the gradient terms (gvec, fprime1, f_integral) are left unset;
+ * everything else is computed as with with_grad = 1, bit for bit. */
+static void geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n, int with_grad)
 {
     double kept[SHL_MAX_VERTS * 3];
     const int m = shl__drop_repeated(verts, n, kept); /* zero-length edges */
@@ -305,7 +310,9 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     shl__pow2_split(-ex, g->grad_scale); /* d/dx = 2^-ex d/dx_scaled */
     memcpy(g->nrm, nrm, sizeof g->nrm);
     g->height = fabs(height);
-    const double dmin = fan_distance((const double(*)[3])g->rel, m, nrm);
+    /* dmin <= the in-plane distance of vertex 0 from the foot <= rmax (up to a few ulps):
+     * beyond 64 |h| > 2 rmax no fan distance can reach 64 |h| */
+    const double dmin = 64.0 * g->height <= 2.0 * rmax ? fan_distance((const double(*)[3])g->rel, m, nrm) : 0.0;
     g->sliver = 64.0 * g->height <= dmin && 4.0 * dmin >= extent;
 
     for (int e = 0; e < m; ++e)
@@ -346,6 +353,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         if (clen > 0.0) {
             for (int k = 0; k < 3; ++k) g->mu[e][k] = c[k] / clen;
             shl__cross3(g->mu[e], g->w[e], g->lam[e]);
+            if (!with_grad) continue;
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
              * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
             double q[3], gxmu[3];
@@ -361,6 +369,16 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             g->fprime1[e] = g->f_integral[e] = 0.0;
         }
     }
+}
+
+void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
+{
+    geom_init(g, x, verts, n, 1);
+}
+
+void shl__poly_geom_init_values(shl__poly_geom *g, const double x[3], const double *verts, int n)
+{
+    geom_init(g, x, verts, n, 0);
 }
 
 /* Near-plane sliver regime (g->sliver: the foot F of x lies outside the triangles
@@ -499,6 +517,27 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
 }
 
+static shl__zh_band_consts zh_bands;
+static pthread_once_t zh_bands_once = PTHREAD_ONCE_INIT;
+
+static void make_zh_bands(void)
+{
+    for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
+        zh_bands.l_m1[l] = l - 1;
+        zh_bands.twol_m1[l] = 2 * l - 1;
+        zh_bands.norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
+        zh_bands.inv_l[l] = 1.0 / (l + (l == 0));
+        zh_bands.s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));
+        zh_bands.s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
+    }
+}
+
+const shl__zh_band_consts *shl__zh_bands(void)
+{
+    pthread_once(&zh_bands_once, make_zh_bands);
+    return &zh_bands;
+}
+
 /* The double recurrence is the scalar ISA's kernel (simd/poly_zh_batch.h, lobes
  * two side by side); shl_polygon and shl_polygon_grad call their context's ISA. */
 void shl__poly_zh_scalar(const shl__poly_geom *g, int lmax, double *zh);
@@ -586,7 +625,7 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
     double zh[SHL__ZH_BLOCK];
-    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_geom_init_values(&g, x, verts, n);
     ctx->isa->poly_zh(&g, ctx->lmax, zh);
     shl__zh_to_sh(ctx->lmax, zh, coeffs);
     return SHL_OK;
@@ -612,7 +651,7 @@ int shl_polygon_f(const shl_ctx *ctx, const float x[3], const float *verts, int 
     if (st) return st;
     shl__poly_geom g;
     float zh[SHL__ZH_BLOCK];
-    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_geom_init_values(&g, xd, vd, n);
     shl__poly_zh_f(&g, ctx->lmax, zh);
     shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
     return SHL_OK;
@@ -658,7 +697,7 @@ int shl_polygon_solid_angle(const double x[3], const double *verts, int n, doubl
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_geom_init_values(&g, x, verts, n);
     *omega = g.solid_angle;
     return SHL_OK;
 }
