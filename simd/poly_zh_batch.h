@@ -153,96 +153,50 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
     if (area) shl__poly_zh_area(g, lmax, zh); /* coefficients as the non-gradient kernel */
 }
 
-/* Coefficients only (shl_polygon): zh_lanes' arithmetic in every lane, bit for bit
- * (test_polygon's hard_extreme_scales compares shl_polygon with shl_polygon_grad),
- * but the G edges of a group run side by side in each band step: their recurrences
- * are independent, so G dependency chains (the dP chain, 5 operations per band)
- * overlap instead of each edge waiting on the previous edge's last band.  Every
- * bsum[l] still adds the edges in order (Eq. 14), so the sums are unchanged. */
-__attribute__((always_inline)) static inline void coeff_edge_group(const shl__poly_geom *g, int e0, const int G,
-                                                                   int lmax, zv ux, zv uy, zv uz, const double *inv_l,
-                                                                   const double *l_m1, const double *twol_m1, zv *bsum)
+void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
 {
-    enum { GMAX = 3 };
-    zv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX];
-    zv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
-#pragma GCC unroll 3
-    for (int k = 0; k < G; ++k) {
-        const int e = e0 + k, f = (e + 1 == g->n) ? 0 : e + 1;
-        const zv gamma = zv_set1(g->gamma[e]);
-        /* Eq. 20: coordinates of the lobe axes in the edge frame */
-        a[k] = zv_dot(ux, uy, uz, g->w[e]);
-        const zv b = zv_dot(ux, uy, uz, g->lam[e]);
-        c[k] = zv_dot(ux, uy, uz, g->mu[e]), af[k] = zv_dot(ux, uy, uz, g->w[f]);
-        c2[k] = c[k] * c[k]; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
-        s[k] = a[k] * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
-        b1[k] = a[k] * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
-        da[k] = zv_dot(ux, uy, uz, g->dw[e]);
-        p_lm1[k] = a[k], p_lm2[k] = zv_set1(1.0);  /* P_{l-1}(a_e), P_{l-2}(a_e) */
-        dp_lm1[k] = da[k], dp_lm2[k] = zv_set1(0.0); /* dP_{l-1}, dP_{l-2} */
-        b_lm1[k] = b1[k], b_lm2[k] = gamma;         /* B_1, B_0 (Eq. 26-27) */
-        d_lm1[k] = gamma, d_lm2[k] = zv_set1(0.0);  /* D_1, D_0 (Eq. 28) */
-        bsum[0] += c[k] * gamma;
-        if (lmax >= 2) bsum[1] += c[k] * b1[k];
-    }
-    for (int l = 2; l < lmax; ++l) { /* B_l up to lmax-1 (Eq. 29) */
-        const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
-#pragma GCC unroll 3
-        for (int k = 0; k < G; ++k) {
-            const zv pl = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-            const zv dl = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
-            /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-            const zv dpl = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
-            /* Eq. 31: C_{l-1} */
-            const zv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
-            const zv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
-            b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
-            bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
-            p_lm2[k] = p_lm1[k], p_lm1[k] = pl;
-            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl;
-            d_lm2[k] = d_lm1[k], d_lm1[k] = dl;
-        }
-    }
+    zh_lanes(g, lmax, zh, zh_grad, 1);
 }
+
+/* Coefficients only (shl_polygon): blocks of ZW lobes by simd/poly_zh_coeff.h (zh_lanes'
+ * arithmetic per lane, edges side by side); a partial last block of at most 2 or 4 lobes
+ * on 2- or 4-lane vectors, which cost a fraction of a full-width block's operations
+ * (lmax 8 has 17 lobes: AVX-512 runs 8 + 8 + 1 lobes as two 8-lane blocks and one 2-lane
+ * block instead of three 8-lane blocks). */
+#define CW_BLOCK2(w) cv_block_##w
+#define CW_BLOCK(w) CW_BLOCK2(w) /* the coefficient block of width w (poly_zh_coeff.h) */
+#define CW ZW
+#include "poly_zh_coeff.h"
+#undef CW
+#if ZW > 2
+#define CW 2
+#include "poly_zh_coeff.h"
+#undef CW
+#endif
+#if ZW > 4
+#define CW 4
+#include "poly_zh_coeff.h"
+#undef CW
+#endif
 
 void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
 {
-    const int n = g->n, ndir = 2 * lmax + 1;
+    const int ndir = 2 * lmax + 1;
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* near-plane sliver: planar Gauss rule (polygon.c) */
         shl__poly_zh_area(g, lmax, zh);
         return;
     }
     const shl__zh_band_consts *bc = shl__zh_bands(); /* zh_lanes' band constants, tabulated once */
-    const double *inv_l = bc->inv_l, *l_m1 = bc->l_m1, *twol_m1 = bc->twol_m1;
-    for (int d0 = 0; d0 < ndir; d0 += ZW) {
-        double t[3][ZW];
-        for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1][c];
-        zv ux, uy, uz, bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1];
-        memcpy(&ux, t[0], sizeof ux);
-        memcpy(&uy, t[1], sizeof uy);
-        memcpy(&uz, t[2], sizeof uz);
-        for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
-        for (int e0 = 0; e0 < n;) { /* groups of 3 edges, of 2 where 2 or 4 are left (n >= 3) */
-            const int rest = n - e0;
-            if (rest == 2 || rest == 4) {
-                coeff_edge_group(g, e0, 2, lmax, ux, uy, uz, inv_l, l_m1, twol_m1, bsum);
-                e0 += 2;
-            } else {
-                coeff_edge_group(g, e0, 3, lmax, ux, uy, uz, inv_l, l_m1, twol_m1, bsum);
-                e0 += 3;
-            }
-        }
-        surf[0] = zv_set1(g->solid_angle); /* S_0 */
-        if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(bc->s_b[l]) * bsum[l - 1] + zv_set1(bc->s_s[l]) * surf[l - 2]; /* Eq. 29 */
-        const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
-        for (int l = 0; l <= lmax; ++l) /* Eq. 13 */
-            zv_scatter(zv_set1(bc->norm[l]) * surf[l], zh + (ptrdiff_t)d0 * SHL__ZH_STRIDE + l, SHL__ZH_STRIDE, cnt);
-    }
-}
-
-void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
-{
-    zh_lanes(g, lmax, zh, zh_grad, 1);
+    /* the partial block first: its few operations form a latency-bound chain, which the
+     * out-of-order core overlaps with the full blocks issued after it */
+    const int full = ndir - ndir % ZW, rest = ndir - full;
+#if ZW > 2
+    if (rest > 0 && rest <= 2) CW_BLOCK(2)(g, lmax, full, rest, bc, zh);
+#if ZW > 4
+    else if (rest > 0 && rest <= 4) CW_BLOCK(4)(g, lmax, full, rest, bc, zh);
+#endif
+    else
+#endif
+    if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
+    for (int d0 = 0; d0 < full; d0 += ZW) CW_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh);
 }

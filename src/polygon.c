@@ -147,12 +147,14 @@ static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], do
 static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n, int e,
                           const double nrm[3], double height, double *extent_out)
 {
-    double extent = 0.0, total = 0.0;
+    double ext2 = 0.0, total = 0.0;
     for (int i = 1; i < n; ++i) {
         double d[3];
         scaled_sub3(verts + 3 * i, verts, e, d);
-        extent = fmax(extent, sqrt(shl__dot3(d, d)));
+        const double d2 = shl__dot3(d, d);
+        ext2 = d2 > ext2 ? d2 : ext2;
     }
+    const double extent = sqrt(ext2); /* = the largest sqrt(d . d): sqrt is monotone and correctly rounded */
     *extent_out = extent;
     if (fabs(height) >= 2.0 * extent) {
         for (int i = 1; i + 1 < n; ++i) {
