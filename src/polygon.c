@@ -62,9 +62,9 @@ static inline dd dd_diff_scaled(double a, double b, int e)
  * largest near 1 (no over/underflow), in double-double: the differences are
  * exact, each product carries a relative error <= ~2 eps^2, so N_k is accurate to
  * ~4 eps^2 sum_i |terms of N_k| (n <= SHL_MAX_VERTS).  Returns the unit normal in
- * nrm and N itself in big (scale 2^-2e); 0 for a zero-area polygon (also vertices
+ * nrm, N itself in big (scale 2^-2e) and |N| in len_out; 0 for a zero-area polygon (also vertices
  * equal up to the sign of zero). */
-static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], int *escale)
+static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], double *len_out, int *escale)
 {
     int e = INT_MIN;
     for (int i = 1; i < n; ++i)
@@ -86,6 +86,7 @@ static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], i
     }
     const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
     const double len = shl__norm3(hi);
+    *len_out = len;
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) nrm[k] = hi[k] / len;
     return 1;
@@ -102,12 +103,11 @@ static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], i
  * (one rounding of the double-double to double, |N| to 2 eps); cond ~ distance / |h| for
  * a tilted plane, so h is accurate to a few ulps while |h| >= ~1e-14 x distance.  An
  * axis-aligned plane is exact (cond = 1). */
-static double plane_height(const double *verts, const double x[3], const dd big[3], int ex)
+static double plane_height(const double *verts, const double x[3], const dd big[3], double len, int ex)
 {
     dd acc = {0.0, 0.0};
     for (int k = 0; k < 3; ++k) acc = dd_add(acc, dd_mul(big[k], dd_diff_scaled(verts[k], x[k], -ex)));
-    const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
-    return acc.hi / shl__norm3(hi); /* N in units 2^-2e of newell_normal: the ratio is in units 2^-ex */
+    return acc.hi / len; /* len = |N| (newell_normal), N in units 2^-2e: the ratio is in units 2^-ex */
 }
 
 /* In-plane offsets from the foot F of x of the vertices (e[i] = rel_i minus its
@@ -283,12 +283,12 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
         g->dist[i] = shl__norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
         if (!(g->dist[i] > 0.0)) return; /* within 2^-1074 of the farthest vertex: on it, in the plane */
     }
-    double nrm[3], rmax = 0.0;
+    double nrm[3], rmax = 0.0, nlen = 0.0;
     dd big[3];
     int ev;
-    if (!newell_normal(kept, m, nrm, big, &ev)) return; /* zero-area polygon: sees nothing */
+    if (!newell_normal(kept, m, nrm, big, &nlen, &ev)) return; /* zero-area polygon: sees nothing */
     for (int i = 0; i < m; ++i) rmax = fmax(rmax, g->dist[i]);
-    const double height = plane_height(kept, x, big, ex); /* signed: > 0 when the polygon lies along +nrm */
+    const double height = plane_height(kept, x, big, nlen, ex); /* signed: > 0 when the polygon lies along +nrm */
     /* Below a few ulps of the distances the side of the plane is decided by rounding. */
     if (fabs(height) <= 8.0 * DBL_EPSILON * rmax) return;
     /* Seen from x, the polygon is counter-clockwise from outside the unit sphere
