@@ -175,7 +175,7 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     double off[SHL_MAX_VERTS][3]; /* in-plane offsets e_i from the foot, s_i = |e_i| */
     plane_offsets(rel, n, nrm, off);
     for (int i = 0; i < n; ++i) s_i[i] = shl__norm3(off[i]);
-    int foot_near_boundary = 0, npos = 0, nneg = 0;
+    int npos = 0, nneg = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double *ei = off[i], *ej = off[j];
@@ -184,19 +184,6 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         shl__cross3(ei, edge, c);
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double si = s_i[i], sj = s_i[j];
-        /* The split omega_i = theta_i + (omega_i - theta_i) below needs the foot well
-         * inside or outside: on an edge or a vertex theta_i is +-pi or atan2(0, 0), and
-         * within ~a of one theta_i turns by O(1) over distances where omega_i barely
-         * changes (fuzz_polygon: foot 1.4e-12 from a vertex at a = 1e-9 gave 4e-5
-         * relative).  There the direct sum is used: its error is the conditioning of a
-         * point near an edge, eps S / d. */
-        double f[3], t = 0.0;
-        for (int k = 0; k < 3; ++k) f[k] = ej[k] - ei[k];
-        const double ff = shl__dot3(f, f);
-        if (ff > 0.0) t = fmin(1.0, fmax(0.0, -shl__dot3(ei, f) / ff));
-        double q[3];
-        for (int k = 0; k < 3; ++k) q[k] = ei[k] + t * f[k]; /* the edge's point nearest the foot */
-        foot_near_boundary |= !(shl__dot3(q, q) > a * a) || /* |q| > a; q, a in scaled units: no underflow of a^2 */ (num == 0.0 && dot <= 0.0) || si == 0.0 || sj == 0.0;
         const double pair = dot >= 0.0 ? ri * rj + dot
                                        : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
         const double den = pair + a * (ri + rj) + a * a;
@@ -210,7 +197,26 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
      * can have, so the split below could not be chosen for a smaller one.  Within 4x
      * of that least (the direct sum loses at most 2 bits to cancellation, as at a
      * moderate height) the split's n more atan2 calls are not spent either. */
-    if (foot_near_boundary || npos == 0 || nneg == 0 || abs_total <= 4.0 * fabs(total)) return fabs(total);
+    if (npos == 0 || nneg == 0 || abs_total <= 4.0 * fabs(total)) return fabs(total);
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1 == n) ? 0 : i + 1;
+        const double *ei = off[i], *ej = off[j];
+        /* The split omega_i = theta_i + (omega_i - theta_i) below needs the foot well
+         * inside or outside: on an edge or a vertex theta_i is +-pi or atan2(0, 0), and
+         * within ~a of one theta_i turns by O(1) over distances where omega_i barely
+         * changes (fuzz_polygon: foot 1.4e-12 from a vertex at a = 1e-9 gave 4e-5
+         * relative).  There the direct sum is used: its error is the conditioning of a
+         * point near an edge, eps S / d. */
+        double f[3], t = 0.0;
+        for (int k = 0; k < 3; ++k) f[k] = ej[k] - ei[k];
+        const double ff = shl__dot3(f, f);
+        if (ff > 0.0) t = fmin(1.0, fmax(0.0, -shl__dot3(ei, f) / ff));
+        double q[3];
+        for (int k = 0; k < 3; ++k) q[k] = ei[k] + t * f[k]; /* the edge's point nearest the foot */
+        if (!(shl__dot3(q, q) > a * a) || /* |q| > a; q, a in scaled units: no underflow of a^2 */
+            (num_i[i] == 0.0 && dot_i[i] <= 0.0) || s_i[i] == 0.0 || s_i[j] == 0.0)
+            return fabs(total);
+    }
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double num = num_i[i], den = den_i[i], dot = dot_i[i], si = s_i[i], sj = s_i[j];
