@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 enum { NPTS = 64, REPS = 5 };
@@ -45,8 +46,18 @@ static int cmp(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1) {
+        const int help = !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h");
+        fprintf(help ? stdout : stderr,
+                "usage: polygon_call\n"
+                "Time per shl_polygon call (double, a triangle, the shading point changing every call) at\n"
+                "lmax 2, 4, 8, 14, 30: lines \"lmax ns\", the median of 5 repetitions of >= 20 ms of thread\n"
+                "CPU time.  Public API only, so it links against an older libshlight.a too:\n"
+                "make bench-vs-commit OLD=<rev> runs it against <rev> and this tree (bench/vs_commit.sh).\n");
+        return help ? 0 : 2;
+    }
     static const int lmaxes[] = {2, 4, 8, 14, 30};
     static double coeffs[SHL_NCOEFFS(30)];
     double verts[9], pts[NPTS][3];
