@@ -169,6 +169,28 @@ bench: $(BENCH_BIN)
 demo: $(BUILD)/bench/demo
 	$(BUILD)/bench/demo
 
+# bench-vs-commit OLD=<rev>: shl_polygon (triangle, lmax 2, 4, 8, 14, 30; bench/polygon_call.c, public
+# API only) of commit <rev> against this tree, same CC and OPT, back to back: <rev>'s tree from
+# `git archive` into $(BUILD)/old-<hash>/src, its libshlight.a built there by its own Makefile (kept
+# for the next run), the same bench source linked against each library; bench/vs_commit.sh alternates
+# the two binaries for BVC_ROUNDS (7) rounds and prints medians and old / new ratios.  The issue-16
+# baseline is OLD=090cb1d (last commit before the issue-16 work; its polygon code equals 2952b88's).
+BVC_ROUNDS ?= 7
+BVC_CFLAGS  = $(CSTD) $(OPT) $(WARN)
+.PHONY: bench-vs-commit
+$(BUILD)/bench/polygon_call: bench/polygon_call.c $(STATIC) include/shlight.h
+	@mkdir -p $(dir $@)
+	$(CC) $(BVC_CFLAGS) -Iinclude -o $@ $< $(STATIC) $(LDLIBS)
+bench-vs-commit: $(BUILD)/bench/polygon_call
+	@test -n "$(OLD)" || { echo "bench-vs-commit: name the old commit, e.g. OLD=090cb1d" >&2; exit 1; }
+	@set -e; rev=$$(git rev-parse --short=7 "$(OLD)^{commit}"); dir=$(BUILD)/old-$$rev; \
+	if [ ! -f $$dir/src/build/libshlight.a ]; then \
+	  rm -rf $$dir; mkdir -p $$dir/src; git archive $$rev | tar -x -C $$dir/src; \
+	  $(MAKE) --no-print-directory -C $$dir/src BUILD=build CC="$(CC)" OPT="$(OPT)" build/libshlight.a >/dev/null; fi; \
+	$(CC) $(BVC_CFLAGS) -I$$dir/src/include -o $$dir/polygon_call bench/polygon_call.c $$dir/src/build/libshlight.a $(LDLIBS); \
+	echo "old = $$rev ($$dir/polygon_call), new = this tree ($(BUILD)/bench/polygon_call), $(CC) $(OPT)"; \
+	sh bench/vs_commit.sh $$dir/polygon_call $(BUILD)/bench/polygon_call $(BVC_ROUNDS)
+
 # The papers' results tables with the PRT harness (about 4 minutes on 2 idle cores; needs the
 # test meshes: SHLIGHT_MESHES=DIR, default ../shared/meshes; build/bench/bench_tables --help).
 # Writes $(BUILD)/bench-tables/ (RESULTS-tables.md, tables/*.csv, manifest.txt), never the tracked
@@ -362,6 +384,7 @@ help:
 	@printf '  %-19s %-64s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
 	@printf '  %-19s %-64s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
 	@printf '  %-19s %-64s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
+	@printf '  %-19s %-64s %s\n' bench-vs-commit 'OLD=<rev>: shl_polygon of <rev> vs this tree, 7 alternated rounds' '~30 s build + 1 min'
 	@printf '  %-19s %-64s %s\n' bench-tables 'the papers'\'' tables into build/bench-tables/ (needs the meshes)' '~5 min'
 	@printf '  %-19s %-64s %s\n' bench-tables-accept 'copy a complete bench-tables run (+ plots) over bench/' '<1 s'
 	@printf '  %-19s %-64s %s\n' install 'all + header, .a, .so + 2 symlinks, .pc into $$(DESTDIR)$$(PREFIX)' 'build + <1 s'

@@ -175,11 +175,6 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         shl__poly_zh_area(g, lmax, zh);
 }
 
-void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
-{
-    zh_lanes(g, lmax, zh, NULL, NULL, 1.0, 0);
-}
-
 void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
 {
     zh_lanes(g, lmax, zh, zh_grad, NULL, 1.0, 1);
@@ -265,4 +260,47 @@ void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax,
         zh_lanes(g, lmax, NULL, NULL, zh4, 1.0, 1);
         grad_sh(lmax, zh4, g->grad_scale, coeffs, grad, nc);
     }
+}
+
+/* Coefficients only (shl_polygon): blocks of ZW lobes by simd/poly_zh_coeff.h (zh_lanes'
+ * arithmetic per lane, edges side by side); a partial last block of at most 2 or 4 lobes
+ * on 2- or 4-lane vectors, which cost a fraction of a full-width block's operations
+ * (lmax 8 has 17 lobes: AVX-512 runs 8 + 8 + 1 lobes as two 8-lane blocks and one 2-lane
+ * block instead of three 8-lane blocks). */
+#define CW_BLOCK2(w) cv_block_##w
+#define CW_BLOCK(w) CW_BLOCK2(w) /* the coefficient block of width w (poly_zh_coeff.h) */
+#define CW ZW
+#include "poly_zh_coeff.h"
+#undef CW
+#if ZW > 2
+#define CW 2
+#include "poly_zh_coeff.h"
+#undef CW
+#endif
+#if ZW > 4
+#define CW 4
+#include "poly_zh_coeff.h"
+#undef CW
+#endif
+
+void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, double *zh)
+{
+    const int ndir = 2 * lmax + 1;
+    if (g->sliver && lmax <= SHL__AREA_LMAX) { /* near-plane sliver: planar Gauss rule (polygon.c) */
+        shl__poly_zh_area(g, lmax, zh);
+        return;
+    }
+    const shl__zh_band_consts *bc = shl__zh_bands(); /* zh_lanes' band constants, tabulated once */
+    /* the partial block first: its few operations form a latency-bound chain, which the
+     * out-of-order core overlaps with the full blocks issued after it */
+    const int full = ndir - ndir % ZW, rest = ndir - full;
+#if ZW > 2
+    if (rest > 0 && rest <= 2) CW_BLOCK(2)(g, lmax, full, rest, bc, zh);
+#if ZW > 4
+    else if (rest > 0 && rest <= 4) CW_BLOCK(4)(g, lmax, full, rest, bc, zh);
+#endif
+    else
+#endif
+    if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
+    for (int d0 = 0; d0 < full; d0 += ZW) CW_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh);
 }

@@ -6,9 +6,18 @@
 #include "zh_tables.h"
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <string.h>
 
 static inline int imax(int a, int b) { return a > b ? a : b; }
+
+/* shl__norm3 with its plain branch inline (the set-up takes ~10 norms per call): the
+ * same value, the scaled fallback out of line */
+static inline double norm3(const double v[3])
+{
+    const double d = shl__dot3(v, v);
+    return d >= 0x1p-896 && d <= 0x1p900 ? sqrt(d) : shl__norm3(v);
+}
 
 /* (a - b) 2^e per component (internal.h) */
 static inline void scaled_sub3(const double a[3], const double b[3], int e, double out[3])
@@ -61,9 +70,9 @@ static inline dd dd_diff_scaled(double a, double b, int e)
  * largest near 1 (no over/underflow), in double-double: the differences are
  * exact, each product carries a relative error <= ~2 eps^2, so N_k is accurate to
  * ~4 eps^2 sum_i |terms of N_k| (n <= SHL_MAX_VERTS).  Returns the unit normal in
- * nrm and N itself in big (scale 2^-2e); 0 for a zero-area polygon (also vertices
+ * nrm, N itself in big (scale 2^-2e) and |N| in len_out; 0 for a zero-area polygon (also vertices
  * equal up to the sign of zero). */
-static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], int *escale)
+static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], double *len_out, int *escale)
 {
     int e = INT_MIN;
     for (int i = 1; i < n; ++i)
@@ -84,7 +93,8 @@ static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], i
         memcpy(prev, next, sizeof prev);
     }
     const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
-    const double len = shl__norm3(hi);
+    const double len = norm3(hi);
+    *len_out = len;
     if (!(len > 0.0)) return 0;
     for (int k = 0; k < 3; ++k) nrm[k] = hi[k] / len;
     return 1;
@@ -101,12 +111,11 @@ static int newell_normal(const double *verts, int n, double nrm[3], dd big[3], i
  * (one rounding of the double-double to double, |N| to 2 eps); cond ~ distance / |h| for
  * a tilted plane, so h is accurate to a few ulps while |h| >= ~1e-14 x distance.  An
  * axis-aligned plane is exact (cond = 1). */
-static double plane_height(const double *verts, const double x[3], const dd big[3], int ex)
+static double plane_height(const double *verts, const double x[3], const dd big[3], double len, int ex)
 {
     dd acc = {0.0, 0.0};
     for (int k = 0; k < 3; ++k) acc = dd_add(acc, dd_mul(big[k], dd_diff_scaled(verts[k], x[k], -ex)));
-    const double hi[3] = {big[0].hi, big[1].hi, big[2].hi};
-    return acc.hi / shl__norm3(hi); /* N in units 2^-2e of newell_normal: the ratio is in units 2^-ex */
+    return acc.hi / len; /* len = |N| (newell_normal), N in units 2^-2e: the ratio is in units 2^-ex */
 }
 
 /* In-plane offsets from the foot F of x of the vertices (e[i] = rel_i minus its
@@ -146,12 +155,14 @@ static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], do
 static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n, int e,
                           const double nrm[3], double height, double *extent_out)
 {
-    double extent = 0.0, total = 0.0;
+    double ext2 = 0.0, total = 0.0;
     for (int i = 1; i < n; ++i) {
         double d[3];
         scaled_sub3(verts + 3 * i, verts, e, d);
-        extent = fmax(extent, sqrt(shl__dot3(d, d)));
+        const double d2 = shl__dot3(d, d);
+        ext2 = d2 > ext2 ? d2 : ext2;
     }
+    const double extent = sqrt(ext2); /* = the largest sqrt(d . d): sqrt is monotone and correctly rounded */
     *extent_out = extent;
     if (fabs(height) >= 2.0 * extent) {
         for (int i = 1; i + 1 < n; ++i) {
@@ -171,8 +182,8 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     double num_i[SHL_MAX_VERTS], den_i[SHL_MAX_VERTS], dot_i[SHL_MAX_VERTS], s_i[SHL_MAX_VERTS];
     double off[SHL_MAX_VERTS][3]; /* in-plane offsets e_i from the foot, s_i = |e_i| */
     plane_offsets(rel, n, nrm, off);
-    for (int i = 0; i < n; ++i) s_i[i] = shl__norm3(off[i]);
-    int foot_near_boundary = 0, npos = 0, nneg = 0;
+    for (int i = 0; i < n; ++i) s_i[i] = norm3(off[i]);
+    int npos = 0, nneg = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double *ei = off[i], *ej = off[j];
@@ -181,6 +192,23 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         shl__cross3(ei, edge, c);
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double si = s_i[i], sj = s_i[j];
+        const double pair = dot >= 0.0 ? ri * rj + dot
+                                       : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
+        const double den = pair + a * (ri + rj) + a * a;
+        const double term = 2.0 * atan2(num, den);
+        total += term;
+        abs_total += fabs(term);
+        npos += term > 0.0, nneg += term < 0.0;
+        num_i[i] = num, den_i[i] = den, dot_i[i] = dot;
+    }
+    /* Terms of one sign: the direct sum's magnitude sum is |total|, the least any form
+     * can have, so the split below could not be chosen for a smaller one.  Within 4x
+     * of that least (the direct sum loses at most 2 bits to cancellation, as at a
+     * moderate height) the split's n more atan2 calls are not spent either. */
+    if (npos == 0 || nneg == 0 || abs_total <= 4.0 * fabs(total)) return fabs(total);
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1 == n) ? 0 : i + 1;
+        const double *ei = off[i], *ej = off[j];
         /* The split omega_i = theta_i + (omega_i - theta_i) below needs the foot well
          * inside or outside: on an edge or a vertex theta_i is +-pi or atan2(0, 0), and
          * within ~a of one theta_i turns by O(1) over distances where omega_i barely
@@ -193,19 +221,10 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
         if (ff > 0.0) t = fmin(1.0, fmax(0.0, -shl__dot3(ei, f) / ff));
         double q[3];
         for (int k = 0; k < 3; ++k) q[k] = ei[k] + t * f[k]; /* the edge's point nearest the foot */
-        foot_near_boundary |= !(shl__dot3(q, q) > a * a) || /* |q| > a; q, a in scaled units: no underflow of a^2 */ (num == 0.0 && dot <= 0.0) || si == 0.0 || sj == 0.0;
-        const double pair = dot >= 0.0 ? ri * rj + dot
-                                       : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
-        const double den = pair + a * (ri + rj) + a * a;
-        const double term = 2.0 * atan2(num, den);
-        total += term;
-        abs_total += fabs(term);
-        npos += term > 0.0, nneg += term < 0.0;
-        num_i[i] = num, den_i[i] = den, dot_i[i] = dot;
+        if (!(shl__dot3(q, q) > a * a) || /* |q| > a; q, a in scaled units: no underflow of a^2 */
+            (num_i[i] == 0.0 && dot_i[i] <= 0.0) || s_i[i] == 0.0 || s_i[j] == 0.0)
+            return fabs(total);
     }
-    /* Terms of one sign: the direct sum's magnitude sum is |total|, the least any form
-     * can have, so the split below could not be chosen for a smaller one. */
-    if (foot_near_boundary || npos == 0 || nneg == 0) return fabs(total);
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double num = num_i[i], den = den_i[i], dot = dot_i[i], si = s_i[i], sj = s_i[j];
@@ -258,7 +277,9 @@ static double fan_distance(const double (*rel)[3], int n, const double nrm[3])
     return best;
 }
 
-void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
+/* with_grad = 0: the gradient terms (gvec, fprime1, f_integral) are left unset;
+ * everything else is computed as with with_grad = 1, bit for bit. */
+static void geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n, int with_grad)
 {
     double kept[SHL_MAX_VERTS * 3];
     const int m = shl__drop_repeated(verts, n, kept); /* zero-length edges */
@@ -273,15 +294,15 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     if (ex == INT_MIN) return; /* x on a vertex: in the plane */
     for (int i = 0; i < m; ++i) {
         scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
-        g->dist[i] = shl__norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
+        g->dist[i] = norm3(g->rel[i]); /* norm3: a vertex within 2^-537 of x would underflow rel . rel */
         if (!(g->dist[i] > 0.0)) return; /* within 2^-1074 of the farthest vertex: on it, in the plane */
     }
-    double nrm[3], rmax = 0.0;
+    double nrm[3], rmax = 0.0, nlen = 0.0;
     dd big[3];
     int ev;
-    if (!newell_normal(kept, m, nrm, big, &ev)) return; /* zero-area polygon: sees nothing */
+    if (!newell_normal(kept, m, nrm, big, &nlen, &ev)) return; /* zero-area polygon: sees nothing */
     for (int i = 0; i < m; ++i) rmax = fmax(rmax, g->dist[i]);
-    const double height = plane_height(kept, x, big, ex); /* signed: > 0 when the polygon lies along +nrm */
+    const double height = plane_height(kept, x, big, nlen, ex); /* signed: > 0 when the polygon lies along +nrm */
     /* Below a few ulps of the distances the side of the plane is decided by rounding. */
     if (fabs(height) <= 8.0 * DBL_EPSILON * rmax) return;
     /* Seen from x, the polygon is counter-clockwise from outside the unit sphere
@@ -295,7 +316,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             }
         for (int i = 0; i < m; ++i) {
             scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
-            g->dist[i] = shl__norm3(g->rel[i]);
+            g->dist[i] = norm3(g->rel[i]);
         }
     }
     double extent;
@@ -305,7 +326,9 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
     shl__pow2_split(-ex, g->grad_scale); /* d/dx = 2^-ex d/dx_scaled */
     memcpy(g->nrm, nrm, sizeof g->nrm);
     g->height = fabs(height);
-    const double dmin = fan_distance((const double(*)[3])g->rel, m, nrm);
+    /* dmin <= the in-plane distance of vertex 0 from the foot <= rmax (up to a few ulps):
+     * beyond 64 |h| > 2 rmax no fan distance can reach 64 |h| */
+    const double dmin = 64.0 * g->height <= 2.0 * rmax ? fan_distance((const double(*)[3])g->rel, m, nrm) : 0.0;
     g->sliver = 64.0 * g->height <= dmin && 4.0 * dmin >= extent;
 
     for (int e = 0; e < m; ++e)
@@ -315,7 +338,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         double edge[3], c[3];
         scaled_sub3(kept + 3 * f, kept + 3 * e, -ex, edge); /* from the input vertices: exact for nearby ones */
         shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
-        const double clen = shl__norm3(c);
+        const double clen = norm3(c);
         /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
         const double dotp = shl__dot3(g->rel[e], g->rel[f]), rr = g->dist[e] * g->dist[f];
         g->gamma[e] = atan2(clen, dotp);
@@ -346,6 +369,7 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
         if (clen > 0.0) {
             for (int k = 0; k < 3; ++k) g->mu[e][k] = c[k] / clen;
             shl__cross3(g->mu[e], g->w[e], g->lam[e]);
+            if (!with_grad) continue;
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
              * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
             double q[3], gxmu[3];
@@ -361,6 +385,16 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
             g->fprime1[e] = g->f_integral[e] = 0.0;
         }
     }
+}
+
+void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n)
+{
+    geom_init(g, x, verts, n, 1);
+}
+
+void shl__poly_geom_init_values(shl__poly_geom *g, const double x[3], const double *verts, int n)
+{
+    geom_init(g, x, verts, n, 0);
 }
 
 /* Near-plane sliver regime (g->sliver: the foot F of x lies outside the triangles
@@ -499,6 +533,27 @@ void shl__poly_zh_area(const shl__poly_geom *g, int lmax, double *zh)
     }
 }
 
+static shl__zh_band_consts zh_bands;
+static pthread_once_t zh_bands_once = PTHREAD_ONCE_INIT;
+
+static void make_zh_bands(void)
+{
+    for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
+        zh_bands.l_m1[l] = l - 1;
+        zh_bands.twol_m1[l] = 2 * l - 1;
+        zh_bands.norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
+        zh_bands.inv_l[l] = 1.0 / (l + (l == 0));
+        zh_bands.s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));
+        zh_bands.s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
+    }
+}
+
+const shl__zh_band_consts *shl__zh_bands(void)
+{
+    pthread_once(&zh_bands_once, make_zh_bands);
+    return &zh_bands;
+}
+
 /* The double recurrence is the scalar ISA's kernel (simd/poly_zh_batch.h, lobes
  * two side by side); shl_polygon and shl_polygon_grad call their context's ISA. */
 void shl__poly_zh_scalar(const shl__poly_geom *g, int lmax, double *zh);
@@ -586,7 +641,7 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
     double zh[SHL__ZH_BLOCK];
-    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_geom_init_values(&g, x, verts, n);
     ctx->isa->poly_zh(&g, ctx->lmax, zh);
     shl__zh_to_sh(ctx->lmax, zh, coeffs);
     return SHL_OK;
@@ -612,7 +667,7 @@ int shl_polygon_f(const shl_ctx *ctx, const float x[3], const float *verts, int 
     if (st) return st;
     shl__poly_geom g;
     float zh[SHL__ZH_BLOCK];
-    shl__poly_geom_init(&g, xd, vd, n);
+    shl__poly_geom_init_values(&g, xd, vd, n);
     shl__poly_zh_f(&g, ctx->lmax, zh);
     shl__zh_to_sh_f(ctx->lmax, zh, coeffs);
     return SHL_OK;
@@ -655,7 +710,7 @@ int shl_polygon_solid_angle(const double x[3], const double *verts, int n, doubl
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    shl__poly_geom_init(&g, x, verts, n);
+    shl__poly_geom_init_values(&g, x, verts, n);
     *omega = g.solid_angle;
     return SHL_OK;
 }

@@ -34,6 +34,21 @@ typedef struct shl__poly_geom {
 
 /* Build the geometry; the caller has validated n and finiteness. */
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n);
+/* Per-band constants of the double ZH recurrence, l <= SHL_LMAX_MAX (the expressions of
+ * simd/poly_zh_batch.h's zh_lanes, so equal bit for bit), computed once (pthread_once). */
+typedef struct {
+    double norm[SHL_LMAX_MAX + 1];    /* K_l = sqrt((2l+1) / 4 pi) */
+    double inv_l[SHL_LMAX_MAX + 1];   /* 1 / l (1 at l = 0) */
+    double l_m1[SHL_LMAX_MAX + 1];    /* l - 1 */
+    double twol_m1[SHL_LMAX_MAX + 1]; /* 2l - 1 */
+    double s_b[SHL_LMAX_MAX + 1];     /* Eq. 29 weights (2l-1) / (l(l+1)) */
+    double s_s[SHL_LMAX_MAX + 1];     /* and (l-2)(l-1) / (l(l+1)) */
+} shl__zh_band_consts;
+const shl__zh_band_consts *shl__zh_bands(void);
+
+/* The same without the gradient terms (gvec, fprime1, f_integral left unset), for
+ * the coefficient kernels; every other field equal to shl__poly_geom_init's. */
+void shl__poly_geom_init_values(shl__poly_geom *g, const double x[3], const double *verts, int n);
 
 /* ZH integrals zh[d * SHL__ZH_STRIDE + l] = int_Q Y_l0(dir_d . w) dw for
  * every lobe d < 2*lmax+1 of the shared lobe table and l <= lmax; the _grad

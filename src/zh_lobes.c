@@ -67,7 +67,20 @@ __attribute__((always_inline)) static inline void block_matvec(const v2 *wt, int
                                                                double *const *out, int at, int step)
 {
     const int nb = ROW_BLOCKS(rows);
-    for (int b = 0; b < nb; ++b) {
+    int b = 0;
+    if (nv == 1) /* one input: two row blocks per pass over k, two independent sums */
+        for (; b + 1 < nb; b += 2) {
+            v2 s0 = SPLAT(0.0), s1 = s0;
+            for (int k = 0; k < cols; ++k) {
+                const v2 x = SPLAT(in[0][k]);
+                s0 += wt[k * nb + b] * x;
+                s1 += wt[k * nb + b + 1] * x;
+            }
+            const int at_b = at + step * 2 * b, cnt = rows - 2 * (b + 1) < 2 ? rows - 2 * (b + 1) : 2;
+            store_rows(&s0, out[0] + at_b, step, 2);
+            store_rows(&s1, out[0] + at_b + 2 * step, step, cnt);
+        }
+    for (; b < nb; ++b) {
         v2 a0 = SPLAT(0.0), a1 = a0, a2 = a0, a3 = a0; /* named sums stay in registers */
         for (int k = 0; k < cols; ++k) {
             const v2 w = wt[k * nb + b];

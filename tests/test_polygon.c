@@ -564,3 +564,38 @@ SHL_TEST(hard_extreme_scales)
                  "2^-515 polygon: max |L_lm| / (K_l eps P) %.2Lg (bound 300)", bad, worst);
     shl_ctx_destroy(ctx);
 }
+
+/* shl_polygon runs a coefficient-only kernel (simd/poly_zh_coeff.h: edges side by side,
+ * partial lobe blocks on narrower vectors) whose every lane does the gradient kernel's
+ * arithmetic: its coefficients must equal shl_polygon_grad's bit for bit, on every ISA,
+ * and the ISAs each other's (lmax 1..9 cover partial blocks of every size 1..7 on each width;
+ * 3, 4 and 6 vertices: edge groups 3, 2 + 2, 3 + 3). */
+SHL_TEST(polygon_coeff_kernel_equals_grad_every_isa)
+{
+    static const int lmaxes[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 14, 30};
+    static double c[NCMAX], cg[NCMAX], g[3 * NCMAX], c0[NCMAX];
+    int cases = 0, bad = 0;
+    for (size_t li = 0; li < sizeof lmaxes / sizeof lmaxes[0]; ++li) {
+        const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
+        shl_ctx *ref = isa_ctx("scalar", lmax);
+        for (int i = 0; i < NISA; ++i) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmax);
+            if (!ctx) continue;
+            rng_t r = {29};
+            for (int it = 0; it < 12; ++it) {
+                double x[3], verts[18];
+                int n;
+                random_case(&r, it % 3, x, verts, &n);
+                CHECK(shl_polygon(ctx, x, verts, n, c) == SHL_OK);
+                CHECK(shl_polygon_grad(ctx, x, verts, n, cg, g) == SHL_OK);
+                CHECK(shl_polygon(ref, x, verts, n, c0) == SHL_OK);
+                bad += memcmp(c, cg, sizeof(double) * nc) != 0 || memcmp(c, c0, sizeof(double) * nc) != 0;
+                ++cases;
+            }
+            shl_ctx_destroy(ctx);
+        }
+        shl_ctx_destroy(ref);
+    }
+    CHECK(bad == 0);
+    harness_note("%d cases (ISAs x lmax x polygons), %d differ from shl_polygon_grad or the scalar ISA", cases, bad);
+}
