@@ -163,7 +163,6 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
                              shl__interp_ahead *ahead, double *out);                                   \
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
-    void shl__poly_zh_grad_##isa(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad); \
     void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc); \
     void shl__poly_hess_##isa(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out); \
     void shl__zh_to_sh_hess6_##isa(int lmax, const double *z10, double *const *out);

@@ -49,21 +49,14 @@ static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
     for (int k = 0; k < count; ++k) out[k * stride] = t[k];
 }
 
-/* zh4 != NULL (with_grad): instead of the blocks zh, zh_grad, the value and the 3 gradient
+/* zh4 != NULL: instead of the blocks zh, zh_grad, the value and the 3 gradient
  * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
  * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
-                                                           double *zh_grad, double *zh4, double gscale,
-                                                           const int with_grad)
+                                                           double *zh_grad, double *zh4, double gscale)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
-    if (area && !with_grad) {
-        shl__poly_zh_area(g, lmax, zh);
-        return;
-    }
-    /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
-    const int ltop = with_grad ? lmax : lmax - 1;
     double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
     double l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
     inv_l[lmax + 1] = 1.0 / (lmax + 1);
@@ -85,9 +78,8 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         memcpy(&uz, t[2], sizeof uz);
         zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1], edge_i[SHL_LMAX_MAX + 1];
         for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
-        if (with_grad)
-            for (int a = 0; a < 3; ++a)
-                for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
+        for (int a = 0; a < 3; ++a)
+            for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
         for (int e = 0; e < n; ++e) {
             const int f = (e + 1 == n) ? 0 : e + 1;
             const zv gamma = zv_set1(g->gamma[e]);
@@ -105,28 +97,23 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
             bsum[0] += c * gamma;
             if (lmax >= 2) bsum[1] += c * b1;
             const zv i0 = zv_set1(g->f_integral[e]), fp1 = zv_set1(g->fprime1[e]);
-            zv v = zv_set1(0.0), i_lm1 = v, j_lm1 = v, j_lm2 = v;
-            if (with_grad) {
-                v = zv_dot(ux, uy, uz, g->gvec[e]);
-                /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-                i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * zv_set1(0.5); /* I_1 */
-                j_lm1 = i0;                                                /* J_1, J_0 = 0 */
-                edge_i[0] = i0;
-                if (lmax >= 1) edge_i[1] = i_lm1;
-            }
-            for (int l = 2; l <= ltop; ++l) {
+            const zv v = zv_dot(ux, uy, uz, g->gvec[e]);
+            /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+            zv i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * zv_set1(0.5); /* I_1 */
+            zv j_lm1 = i0, j_lm2 = zv_set1(0.0);                        /* J_1, J_0 = 0 */
+            edge_i[0] = i0;
+            if (lmax >= 1) edge_i[1] = i_lm1;
+            for (int l = 2; l <= lmax; ++l) {
                 const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
                 const zv pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl; /* Eq. 11 */
                 const zv dl = tlm1 * b_lm1 + d_lm2;                  /* Eq. 32 */
                 /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
                 const zv dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
-                if (with_grad) {
-                    const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
-                    const zv jl = tlm1 * i_lm1 + j_lm2;
-                    j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-                    edge_i[l] = il;
-                    if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
-                }
+                const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
+                const zv jl = tlm1 * i_lm1 + j_lm2;
+                j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
+                edge_i[l] = il;
+                if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
                 /* Eq. 31: C_{l-1} */
                 const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
                 const zv bl = (tlm1 * cl - lm1 * b_lm2) * rl; /* Eq. 30 */
@@ -136,11 +123,10 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
                 dp_lm2 = dp_lm1, dp_lm1 = dpl;
                 d_lm2 = d_lm1, d_lm1 = dl;
             }
-            if (with_grad) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
-                for (int ax = 0; ax < 3; ++ax) {
-                    const zv m = zv_set1(g->mu[e][ax]);
-                    for (int l = 0; l <= lmax; ++l) gsum[ax][l] += m * edge_i[l];
-                }
+            for (int ax = 0; ax < 3; ++ax) { /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+                const zv m = zv_set1(g->mu[e][ax]);
+                for (int l = 0; l <= lmax; ++l) gsum[ax][l] += m * edge_i[l];
+            }
         }
         surf[0] = zv_set1(g->solid_angle); /* S_0 */
         if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
@@ -162,8 +148,7 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
             const zv kl = zv_set1(norm[l]);
             const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
             if (!area) zv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
-            if (with_grad)
-                for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
+            for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
         }
     }
     if (area && zh4) { /* coefficients as the non-gradient kernel */
@@ -175,10 +160,12 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         shl__poly_zh_area(g, lmax, zh);
 }
 
+#if SHL_VLEN == 1 /* the separate blocks are read by shl__poly_zh_grad_d (float path, light sets) only */
 void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax, double *zh, double *zh_grad)
 {
-    zh_lanes(g, lmax, zh, zh_grad, NULL, 1.0, 1);
+    zh_lanes(g, lmax, zh, zh_grad, NULL, 1.0);
 }
+#endif
 
 /* Wang 2018 Eq. 33 with the lobe pairs of src/zh_lobes.c (lobe 2k-1 and its mirror 2k:
  * even block m >= 0 from their sums, odd block m < 0 from their differences) for the value
@@ -254,10 +241,10 @@ void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax,
 {
     double zh4[4 * (2 * SHL_LMAX_MAX + 1) * (SHL_LMAX_MAX + 1)];
     if (shl__poly_hess_fold(g)) { /* 2^-E into the band weights: the same bits as multiplying afterwards */
-        zh_lanes(g, lmax, NULL, NULL, zh4, g->grad_scale[0] * g->grad_scale[1], 1);
+        zh_lanes(g, lmax, NULL, NULL, zh4, g->grad_scale[0] * g->grad_scale[1]);
         grad_sh(lmax, zh4, NULL, coeffs, grad, nc);
     } else {
-        zh_lanes(g, lmax, NULL, NULL, zh4, 1.0, 1);
+        zh_lanes(g, lmax, NULL, NULL, zh4, 1.0);
         grad_sh(lmax, zh4, g->grad_scale, coeffs, grad, nc);
     }
 }

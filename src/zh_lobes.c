@@ -9,8 +9,7 @@
  * m = 0.. of that column, padded with zeros to a multiple of 2), so one vector
  * of 2 weights times u_k updates 2 coefficients; every coefficient is still the
  * plain sum over k = 0, 1, ... in order (results equal to a row-by-row dot
- * product).  Several inputs (a value and its three gradient components) share
- * each weight load. */
+ * product). */
 #include "polygon.h"
 #include "zh_tables.h"
 #include <pthread.h>
@@ -19,7 +18,6 @@
 /* two rows per vector: the native width of the baseline (SSE2, NEON); gcc keeps wider
  * generic vectors in memory there */
 typedef double v2 __attribute__((vector_size(2 * sizeof(double))));
-enum { NV_MAX = 4 };
 
 #define ROW_BLOCKS(rows) (((rows) + 1) / 2)
 /* Transposed, padded blocks: band l's even block has l+1 columns of ROW_BLOCKS(l+1)
@@ -61,83 +59,58 @@ static inline void store_rows(const v2 *acc, double *out, int step, int cnt)
     for (int j = 0; j < cnt; ++j) out[step * j] = t[j];
 }
 
-/* out[v][at + step * m] = sum_k W[m][k] in[v][k], m < rows, k < cols, v < nv */
-__attribute__((always_inline)) static inline void block_matvec(const v2 *wt, int rows, int cols, int nv,
-                                                               const double (*in)[SHL_LMAX_MAX + 1],
-                                                               double *const *out, int at, int step)
+/* out[at + step * m] = sum_k W[m][k] in[k], m < rows, k < cols: two row blocks per pass
+ * over k (two independent sums), then the last block if rows need an odd count */
+static inline void block_matvec(const v2 *wt, int rows, int cols, const double *in, double *out, int at, int step)
 {
     const int nb = ROW_BLOCKS(rows);
     int b = 0;
-    if (nv == 1) /* one input: two row blocks per pass over k, two independent sums */
-        for (; b + 1 < nb; b += 2) {
-            v2 s0 = SPLAT(0.0), s1 = s0;
-            for (int k = 0; k < cols; ++k) {
-                const v2 x = SPLAT(in[0][k]);
-                s0 += wt[k * nb + b] * x;
-                s1 += wt[k * nb + b + 1] * x;
-            }
-            const int at_b = at + step * 2 * b, cnt = rows - 2 * (b + 1) < 2 ? rows - 2 * (b + 1) : 2;
-            store_rows(&s0, out[0] + at_b, step, 2);
-            store_rows(&s1, out[0] + at_b + 2 * step, step, cnt);
-        }
-    for (; b < nb; ++b) {
-        v2 a0 = SPLAT(0.0), a1 = a0, a2 = a0, a3 = a0; /* named sums stay in registers */
+    for (; b + 1 < nb; b += 2) {
+        v2 s0 = SPLAT(0.0), s1 = s0;
         for (int k = 0; k < cols; ++k) {
-            const v2 w = wt[k * nb + b];
-            a0 += w * SPLAT(in[0][k]);
-            if (nv == NV_MAX) {
-                a1 += w * SPLAT(in[1][k]);
-                a2 += w * SPLAT(in[2][k]);
-                a3 += w * SPLAT(in[3][k]);
-            }
+            const v2 x = SPLAT(in[k]);
+            s0 += wt[k * nb + b] * x;
+            s1 += wt[k * nb + b + 1] * x;
         }
-        const int cnt = rows - 2 * b < 2 ? rows - 2 * b : 2, at_b = at + step * 2 * b;
-        store_rows(&a0, out[0] + at_b, step, cnt);
-        if (nv == NV_MAX) {
-            store_rows(&a1, out[1] + at_b, step, cnt);
-            store_rows(&a2, out[2] + at_b, step, cnt);
-            store_rows(&a3, out[3] + at_b, step, cnt);
-        }
+        const int at_b = at + step * 2 * b, cnt = rows - 2 * (b + 1) < 2 ? rows - 2 * (b + 1) : 2;
+        store_rows(&s0, out + at_b, step, 2);
+        store_rows(&s1, out + at_b + 2 * step, step, cnt);
+    }
+    if (b < nb) {
+        v2 a = SPLAT(0.0);
+        for (int k = 0; k < cols; ++k) a += wt[k * nb + b] * SPLAT(in[k]);
+        store_rows(&a, out + at + step * 2 * b, step, rows - 2 * b < 2 ? rows - 2 * b : 2);
     }
 }
 
-/* Bands 0..lmax of nv ZH blocks (input v at zh + v * SHL__ZH_BLOCK, values read
- * through the getter so float input shares the code) into out[v][0..nc). */
-__attribute__((always_inline)) static inline void to_sh(int lmax, const double *zh, const float *zh_f, int nv,
-                                                        double *const *out)
+/* Bands 0..lmax of one ZH block (values read through the getter so float input
+ * shares the code) into out[0..nc). */
+static inline void to_sh(int lmax, const double *zh, const float *zh_f, double *out)
 {
     pthread_once(&tables_once, make_tables);
     for (int l = 0; l <= lmax; ++l) {
-        double even[NV_MAX][SHL_LMAX_MAX + 1], odd[NV_MAX][SHL_LMAX_MAX + 1];
-        for (int v = 0; v < nv; ++v) {
-            const ptrdiff_t base = (ptrdiff_t)v * SHL__ZH_BLOCK + l;
-#define ZH(i) (zh ? zh[base + (ptrdiff_t)(i) * SHL__ZH_STRIDE] : (double)zh_f[base + (ptrdiff_t)(i) * SHL__ZH_STRIDE])
-            even[v][0] = ZH(0);
-            for (int k = 1; k <= l; ++k) {
-                const double z1 = ZH(2 * k - 1), z2 = ZH(2 * k);
-                even[v][k] = z1 + z2;
-                odd[v][k - 1] = z1 - z2;
-            }
-#undef ZH
+        double even[SHL_LMAX_MAX + 1], odd[SHL_LMAX_MAX + 1];
+#define ZH(i) (zh ? zh[l + (ptrdiff_t)(i) * SHL__ZH_STRIDE] : (double)zh_f[l + (ptrdiff_t)(i) * SHL__ZH_STRIDE])
+        even[0] = ZH(0);
+        for (int k = 1; k <= l; ++k) {
+            const double z1 = ZH(2 * k - 1), z2 = ZH(2 * k);
+            even[k] = z1 + z2;
+            odd[k - 1] = z1 - z2;
         }
-        block_matvec(even_t + even_at[l], l + 1, l + 1, nv, (const double(*)[SHL_LMAX_MAX + 1])even, out,
-                     l * (l + 1), 1);
-        if (l > 0)
-            block_matvec(odd_t + odd_at[l], l, l, nv, (const double(*)[SHL_LMAX_MAX + 1])odd, out, l * (l + 1) - 1,
-                         -1);
+#undef ZH
+        block_matvec(even_t + even_at[l], l + 1, l + 1, even, out, l * (l + 1), 1);
+        if (l > 0) block_matvec(odd_t + odd_at[l], l, l, odd, out, l * (l + 1) - 1, -1);
     }
 }
 
 void shl__zh_to_sh(int lmax, const double *zh, double *coeffs)
 {
-    double *const out[1] = {coeffs};
-    to_sh(lmax, zh, NULL, 1, out);
+    to_sh(lmax, zh, NULL, coeffs);
 }
 
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs)
 {
     double tmp[SHL_NCOEFFS(SHL_LMAX_MAX)];
-    double *const out[1] = {tmp};
-    to_sh(lmax, NULL, zh, 1, out);
+    to_sh(lmax, NULL, zh, tmp);
     for (int i = 0; i < SHL_NCOEFFS(lmax); ++i) coeffs[i] = (float)tmp[i];
 }
