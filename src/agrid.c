@@ -299,16 +299,89 @@ int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double 
     return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
 }
 
+/* ---- receivers ---- */
+
+/* The bits of x < 2^21 spread to every third bit. */
+static uint64_t spread3(uint64_t x)
+{
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFu;
+    x = (x | x << 16) & 0x1F0000FF0000FFu;
+    x = (x | x << 8) & 0x100F00F00F00F00Fu;
+    x = (x | x << 4) & 0x10C30C30C30C30C3u;
+    x = (x | x << 2) & 0x1249249249249249u;
+    return x;
+}
+
+/* Morton key of lattice cell c: the cells of level l + s inside cell c of level l
+ * are the keys (key << 3s) .. ((key + 1) << 3s) - 1, a contiguous range. */
+static uint64_t morton(const int c[3])
+{
+    return spread3((uint64_t)c[0]) | spread3((uint64_t)c[1]) << 1 | spread3((uint64_t)c[2]) << 2;
+}
+
+static int by_key(const void *pa, const void *pb)
+{
+    const uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* Receivers with key < k. */
+static size_t below(const shl_agrid *g, uint64_t k)
+{
+    size_t lo = 0, hi = g->nrecv;
+    while (lo < hi) {
+        const size_t m = lo + (hi - lo) / 2;
+        if (g->recv[m] < k) lo = m + 1;
+        else hi = m;
+    }
+    return lo;
+}
+
+/* The weight of cell c of level l in the refinement priority: the fraction of the
+ * receivers it holds, or without receivers its volume in coarse-cell units 8^-l. */
+static double cell_weight(const shl_agrid *g, int l, const int c[3])
+{
+    if (!g->recv) return ldexp(1.0, -3 * l);
+    const int s = 3 * (g->max_levels - 1 - l);
+    const uint64_t k = morton(c);
+    return (double)(below(g, (k + 1) << s) - below(g, k << s)) / (double)g->nrecv;
+}
+
+int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts)
+{
+    if (!grid || (npts > 0 && !pts)) return SHL_ENULL;
+    if (npts < 0) return SHL_EDOMAIN;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    uint64_t *k = NULL;
+    if (npts > 0 && !(k = shl__malloc((size_t)npts * sizeof *k))) return SHL_ENOMEM;
+    const int top = grid->max_levels - 1;
+    for (int p = 0; p < npts; ++p) {
+        int c[3];
+        for (int a = 0; a < 3; ++a) { /* the finest level's cell, clamped to the box as shl_agrid_interp clamps */
+            const int n = (grid->res[a] - 1) << top;
+            const double t = floor((pts[3 * p + a] - grid->lo[a]) / (grid->hi[a] - grid->lo[a]) * n);
+            c[a] = t < 0.0 ? 0 : t >= n ? n - 1 : (int)t;
+        }
+        k[p] = morton(c);
+    }
+    if (npts > 0) qsort(k, (size_t)npts, sizeof *k, by_key);
+    shl__free(grid->recv);
+    grid->recv = k;
+    grid->nrecv = (size_t)npts;
+    return SHL_OK;
+}
+
 /* ---- fill ---- */
 
 enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
 
-/* A cell (index in its level), its estimate or criterion value e and its
- * refinement priority p = e 8^-l (e times its volume in coarse-cell units); or, if
- * pending, a refined cell whose children are not estimated yet, e and p bounds on
- * theirs (build()). */
+/* A cell (index in its level), its estimate e, its weight w (cell_weight) and its
+ * refinement priority p = e w; or, if pending, a refined cell whose children are not
+ * estimated yet, e and p bounds on theirs (build()). */
 typedef struct {
-    double e, p;
+    double e, p, w;
     uint32_t cell;
     int level, pending;
 } ranked;
@@ -431,6 +504,12 @@ static int estimate_cells(fill_job *job, ranked *which, size_t nwhich, int nthre
     return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
 }
 
+/* The criterion value of r: e (SHL_AGRID_MAX) or its share of the mean error p (SHL_AGRID_MEAN). */
+static double crit(const shl_agrid *g, const ranked *r)
+{
+    return g->criterion == SHL_AGRID_MEAN ? r->p : r->e;
+}
+
 static int by_estimate(const void *pa, const void *pb)
 {
     const ranked *a = pa, *b = pb;
@@ -496,7 +575,7 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
         st->cells += (long)lev[l].ncells;
         bytes += level_bytes(lev + l, g->node_len);
     }
-    st->bytes = (long long)bytes;
+    st->bytes = (long long)(bytes + g->nrecv * sizeof(uint64_t));
 }
 
 /* Room for n more entries in the growable array *p (size *cap, used elements used). */
@@ -535,17 +614,21 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
     int unknown = g->max_levels < 2; /* cells left unestimated: on the finest level, or children still waiting */
     if (!status && !unknown && !(status = reserve(&est, &ecap, 0, lev[0].ncells)))
-        for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0, 0};
+        for (size_t c = 0; c < lev[0].ncells; ++c) {
+            int ci[3];
+            unkey(lev[0].cell_key[c], ci);
+            const double w = cell_weight(g, 0, ci);
+            if (w > 0.0) est[ne++] = (ranked){0.0, 0.0, w, (uint32_t)c, 0, 0}; /* a cell without receivers: never refined */
+        }
     while (!status) {
         /* the new cells' estimates; criterion values above tol join the queue */
         if ((status = estimate_cells(&job, est, ne, nthreads)) || (status = reserve(&queue, &qcap, nq, ne))) break;
         st->samples += SAMPLES * (long)ne;
         for (size_t k = 0; k < ne; ++k) {
             ranked r = est[k];
-            r.p = ldexp(r.e, -3 * r.level); /* the cell's volume / h_0^3 */
-            if (g->criterion == SHL_AGRID_MEAN) r.e = r.p;
-            if (r.e > g->tol) queue[nq++] = r;
-            else st->max_estimate = fmax(st->max_estimate, r.e);
+            r.p = r.e * r.w;
+            if (crit(g, &r) > g->tol) queue[nq++] = r;
+            else st->max_estimate = fmax(st->max_estimate, crit(g, &r));
         }
         ne = 0;
         if (nq == 0 || st->budget_hit) break;
@@ -565,7 +648,8 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                 for (int j = 0; j < 8; ++j) {
                     int cc[3];
                     for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
-                    est[ne++] = (ranked){0.0, 0.0, (uint32_t)hfind(&lev[l + 1].cells, key3(cc)), l + 1, 0};
+                    const double w = cell_weight(g, l + 1, cc);
+                    if (w > 0.0) est[ne++] = (ranked){0.0, 0.0, w, (uint32_t)hfind(&lev[l + 1].cells, key3(cc)), l + 1, 0};
                 }
                 continue;
             }
@@ -592,19 +676,26 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         if ((status = eval_nodes(&job, *nl, nthreads))) break;
         /* a refined cell's children wait in the queue, unestimated, as one pending entry
          * with the bounds the assumption that refinement does not increase e gives
-         * (include/shlight.h): e_child <= e, so p_child <= p / 8 and, for
-         * SHL_AGRID_MEAN, criterion <= e / 8 (dropped if that is <= tol); they are
-         * estimated when the entry reaches the head (never, if the budget runs out
-         * first).  Children on the finest level allowed are not estimated. */
+         * (include/shlight.h): e_child <= e, so p_child <= e max_j w_j (= p / 8 without
+         * receivers) and, for SHL_AGRID_MEAN, criterion <= that (dropped if <= tol);
+         * they are estimated when the entry reaches the head (never, if the budget runs
+         * out first).  Children on the finest level allowed are not estimated. */
         if ((status = reserve(&queue, &qcap, nq, nd))) break;
         for (size_t d = 0; d < nd; ++d) {
             if (done[d].level + 2 >= g->max_levels) {
                 unknown = 1;
                 continue;
             }
-            const ranked r = {g->criterion == SHL_AGRID_MEAN ? done[d].e / 8.0 : done[d].e, done[d].p / 8.0, done[d].cell,
-                              done[d].level, 1};
-            if (r.e > g->tol) queue[nq++] = r;
+            int ci[3];
+            unkey(lev[done[d].level].cell_key[done[d].cell], ci);
+            double w = 0.0;
+            for (int j = 0; j < 8; ++j) {
+                int cc[3];
+                for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
+                w = fmax(w, cell_weight(g, done[d].level + 1, cc));
+            }
+            const ranked r = {done[d].e, done[d].e * w, w, done[d].cell, done[d].level, 1};
+            if (crit(g, &r) > g->tol) queue[nq++] = r;
         }
     }
     if (!status) {
@@ -614,7 +705,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                 unknown = 1;
                 continue;
             }
-            st->max_estimate = fmax(st->max_estimate, queue[k].e);
+            st->max_estimate = fmax(st->max_estimate, crit(g, queue + k));
             ++real;
         }
         st->unresolved = unknown ? -1 : real;
@@ -703,6 +794,7 @@ void shl_agrid_destroy(shl_agrid *grid)
 {
     if (!grid) return;
     free_levels(grid->lev, grid->nlevels);
+    shl__free(grid->recv);
     shl__free(grid);
 }
 

@@ -50,6 +50,9 @@ struct shl_agrid {
     int nlevels;
     shl__alevel lev[SHL_AGRID_LEVELS_MAX];
     shl_agrid_stats stats;
+    uint64_t *recv;        /* shl_agrid_set_receivers: Morton keys of the receivers' cells on level
+                              max_levels - 1, ascending (NULL: none set) */
+    size_t nrecv;
 };
 
 #endif
