@@ -436,10 +436,13 @@ int shl_agrid_get_stats(const shl_agrid *grid, shl_agrid_stats *stats);
  * instead of its volume 8^-l: priority p = e n_cell / n, the SHL_AGRID_MEAN
  * criterion e n_cell / n (the cell's share of the mean error over the receivers),
  * pending children bounded by e max_j n_child_j / n; a cell holding no receiver
- * is never estimated nor refined (it keeps level 0's, or its ring's, data).  A
+ * is never estimated nor refined (it keeps level 0's, or its ring's, data); the
+ * estimate's two samples are the cell's receivers at 1/4 and 3/4 of its list (in
+ * Morton order of their finest-level cells), rounded to float, instead of the
+ * fixed points (the error where the grid is used, not off the surfaces).  A
  * receiver belongs to the half-open cells containing it, points outside the box
  * to those their clamped position falls in (as shl_agrid_interp clamps); the grid
- * keeps one 8-byte key per receiver (in stats.bytes), not the points.  Errors
+ * keeps a copy (a key and the float point, 24 bytes per receiver, in stats.bytes).  Errors
  * leave the grid unchanged: SHL_ENULL (grid, or pts with npts > 0), SHL_EDOMAIN
  * (npts < 0), SHL_ENONFINITE, SHL_ENOMEM.
  */

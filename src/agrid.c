@@ -320,10 +320,13 @@ static uint64_t morton(const int c[3])
     return spread3((uint64_t)c[0]) | spread3((uint64_t)c[1]) << 1 | spread3((uint64_t)c[2]) << 2;
 }
 
+typedef struct shl__arecv keyed;
+
 static int by_key(const void *pa, const void *pb)
 {
-    const uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
-    return (a > b) - (a < b);
+    const keyed *a = pa, *b = pb;
+    if (a->key != b->key) return (a->key > b->key) - (a->key < b->key);
+    return memcmp(a->x, b->x, sizeof a->x); /* a total order: the result does not depend on qsort */
 }
 
 /* Receivers with key < k. */
@@ -332,7 +335,7 @@ static size_t below(const shl_agrid *g, uint64_t k)
     size_t lo = 0, hi = g->nrecv;
     while (lo < hi) {
         const size_t m = lo + (hi - lo) / 2;
-        if (g->recv[m] < k) lo = m + 1;
+        if (g->recv[m].key < k) lo = m + 1;
         else hi = m;
     }
     return lo;
@@ -354,7 +357,7 @@ int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts)
     if (npts < 0) return SHL_EDOMAIN;
     for (int p = 0; p < npts; ++p)
         if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
-    uint64_t *k = NULL;
+    keyed *k = NULL;
     if (npts > 0 && !(k = shl__malloc((size_t)npts * sizeof *k))) return SHL_ENOMEM;
     const int top = grid->max_levels - 1;
     for (int p = 0; p < npts; ++p) {
@@ -363,8 +366,10 @@ int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts)
             const int n = (grid->res[a] - 1) << top;
             const double t = floor((pts[3 * p + a] - grid->lo[a]) / (grid->hi[a] - grid->lo[a]) * n);
             c[a] = t < 0.0 ? 0 : t >= n ? n - 1 : (int)t;
+            const double x = fmin(fmax(pts[3 * p + a], grid->lo[a]), grid->hi[a]);
+            k[p].x[a] = (float)x;
         }
-        k[p] = morton(c);
+        k[p].key = morton(c);
     }
     if (npts > 0) qsort(k, (size_t)npts, sizeof *k, by_key);
     shl__free(grid->recv);
@@ -444,9 +449,16 @@ static void estimate_range(void *arg, int worker, long begin, long end)
             const shl__alevel *L = job->lev + r->level;
             int c[3];
             unkey(L->cell_key[r->cell], c);
+            size_t b0 = 0, b1 = 0;
+            if (g->recv) {
+                const int sh = 3 * (g->max_levels - 1 - r->level);
+                b0 = below(g, morton(c) << sh);
+                b1 = below(g, (morton(c) + 1) << sh);
+            }
             for (int q = 0; q < SAMPLES; ++q)
-                for (int k = 0; k < 3; ++k)
-                    pts[3 * (SAMPLES * j + q) + k] = (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
+                for (int k = 0; k < 3; ++k) /* with receivers, the ones at 1/4 and 3/4 of the cell's (Morton) list */
+                    pts[3 * (SAMPLES * j + q) + k] = g->recv ? g->recv[b0 + (b1 - b0) * (q ? 3 : 1) / 4].x[k]
+                                                           : (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
         }
         shl__lights_batch_f_block(&job->ctx, job->lights, SAMPLES * mc, pts, rgb, nv, NULL, 0,
                                   job->batch_bytes ? w : NULL);
@@ -575,7 +587,7 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
         st->cells += (long)lev[l].ncells;
         bytes += level_bytes(lev + l, g->node_len);
     }
-    st->bytes = (long long)(bytes + g->nrecv * sizeof(uint64_t));
+    st->bytes = (long long)(bytes + g->nrecv * sizeof(struct shl__arecv));
 }
 
 /* Room for n more entries in the growable array *p (size *cap, used elements used). */
