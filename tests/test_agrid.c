@@ -530,7 +530,7 @@ static int refined_cells_hold(const shl_agrid *g, int np, const double *pts, int
  * receivers does refine (around the light); (2) the mean error at the receivers
  * against shl_lights_eval (double) falls as the budget grows 4x, and is below that
  * of the same budget's fill without receivers.  Both comparative, strict, no
- * tolerance (the ratios are noted).  Bad input: nothing changes. */
+ * tolerance (the ratios are noted).  Bad input and a failed allocation: nothing changes. */
 SHL_TEST(agrid_receivers_refine_their_half)
 {
     shl_ctx *ctx = ctx_new();
@@ -555,6 +555,10 @@ SHL_TEST(agrid_receivers_refine_their_half)
                 CHECK(shl_agrid_set_receivers(g, 1, nan_pt) == SHL_ENONFINITE && g->recv == NULL);
                 CHECK(shl_agrid_set_receivers(g, -1, pts) == SHL_EDOMAIN && shl_agrid_set_receivers(g, 1, NULL) == SHL_ENULL);
                 CHECK(shl_agrid_set_receivers(NULL, 0, NULL) == SHL_ENULL && g->recv == NULL);
+                shl__alloc_fail_after = 0;
+                const int oom = shl_agrid_set_receivers(g, NP, pts);
+                shl__alloc_fail_after = -1;
+                CHECK(oom == SHL_ENOMEM && g->recv == NULL);
                 CHECK(shl_agrid_set_receivers(g, NP, pts) == SHL_OK);
             }
             CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
