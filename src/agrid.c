@@ -122,27 +122,17 @@ static int add_node(shl__alevel *L, const int i[3], size_t node_len)
 {
     if (L->nnodes == L->node_cap) {
         const size_t cap = L->node_cap ? 2 * L->node_cap : 256;
-        /* all three grown before any is swapped in, so that a failure leaves L consistent */
-        uint64_t *k = shl__malloc(cap * sizeof *k);
-        float *d = shl__malloc(cap * node_len * sizeof *d);
-        unsigned char *f = shl__malloc(cap);
-        if (!k || !d || !f) {
-            shl__free(k);
-            shl__free(d);
-            shl__free(f);
-            return SHL_ENOMEM;
-        }
-        if (L->nnodes) {
-            memcpy(k, L->node_key, L->nnodes * sizeof *k);
-            memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
-            memcpy(f, L->flag, L->nnodes);
-        }
-        shl__free(L->node_key);
-        shl__free(L->data);
-        shl__free(L->flag);
+        /* realloc (large blocks move by remapping, not copying); each array is swapped in
+         * as it grows and node_cap set only when all three have: a failure leaves L consistent */
+        uint64_t *k = shl__realloc(L->node_key, cap * sizeof *k);
+        if (!k) return SHL_ENOMEM;
         L->node_key = k;
-        L->data = d;
+        unsigned char *f = shl__realloc(L->flag, cap);
+        if (!f) return SHL_ENOMEM;
         L->flag = f;
+        float *d = shl__realloc(L->data, cap * node_len * sizeof *d);
+        if (!d) return SHL_ENOMEM;
+        L->data = d;
         L->node_cap = L->data_cap = cap;
     }
     if (hreserve(&L->nodes)) return SHL_ENOMEM;
@@ -402,6 +392,8 @@ typedef struct {
     size_t nwhich;
     char *ws;
     size_t stride, batch_bytes;
+    char *wsbuf;    /* run(): the workspaces, kept across a fill's passes (grown when too small) */
+    size_t wsbytes;
 } fill_job;
 
 /* The new nodes of every level, blocks of BLOCK consecutive nodes of one level,
@@ -487,12 +479,16 @@ static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size
     if (nblocks == 0) return SHL_OK;
     const int nw = shl__parallel_workers(nblocks, 1, nthreads);
     job->stride = shl__ws_stride(shl__ws_stride(job->batch_bytes) + extra);
-    job->ws = NULL;
-    if (job->stride && !(job->ws = shl__malloc(job->stride * (size_t)nw))) return SHL_ENOMEM;
-    const int st = shl__parallel_for(nblocks, 1, nw, fn, job);
-    shl__free(job->ws);
-    job->ws = NULL;
-    return st;
+    const size_t need = job->stride * (size_t)nw;
+    if (need > job->wsbytes) { /* a fresh block per pass costs page faults at every round */
+        char *w = shl__malloc(need);
+        if (!w) return SHL_ENOMEM;
+        shl__free(job->wsbuf);
+        job->wsbuf = w;
+        job->wsbytes = need;
+    }
+    job->ws = job->wsbuf;
+    return shl__parallel_for(nblocks, 1, nw, fn, job);
 }
 
 /* The nodes of levels 0..nl-1 not yet evaluated, in one parallel pass. */
@@ -564,10 +560,8 @@ static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint
 /* The node data of a filled level cut to its node count (kept as is if that allocation fails). */
 static void trim_data(shl__alevel *L, size_t node_len)
 {
-    float *d = shl__malloc(L->nnodes * node_len * sizeof *d);
+    float *d = L->nnodes ? shl__realloc(L->data, L->nnodes * node_len * sizeof *d) : NULL;
     if (!d) return;
-    memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
-    shl__free(L->data);
     L->data = d;
     L->data_cap = L->nnodes;
 }
@@ -727,6 +721,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     shl__free(queue);
     shl__free(est);
     shl__free(done);
+    shl__free(job.wsbuf);
     return status;
 }
 
