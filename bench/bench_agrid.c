@@ -15,16 +15,20 @@
  * rel_max,bytes (fill_s wall, cpu_s process CPU time of the fill, best of the repetitions;
  * samples: the estimate's light-set evaluations without gradients (stats.samples), the
  * fill's cost beyond its nodes; with the node count a cost proxy that load does not disturb).
- * 2. Image error (the issue's measure): both scenes rendered as bench_tables renders them
+ * 2. Image error (the issue's measure): the scenes of --image-scenes (default wu-fig12,wu-monkey)
+ * rendered as bench_tables renders them
  * (meshes from --meshes DIR, else $SHLIGHT_MESHES, else ../shared/meshes; skipped with a
  * note when absent), per-vertex analytic float SIMD at the visible vertices as the
  * reference, uniform grids and adaptive grids (SHL_AGRID_MEAN: coarse 4^3 and 8^3 at
- * tolerances, 4^3 at budgets) lighting every vertex; rel. MAE of the image
+ * tolerances, 4^3 at budgets; each without receivers, kinds mean and budget, and with every
+ * mesh vertex a receiver, shl_agrid_set_receivers, kinds mean-recv and budget-recv, its cost
+ * timed with the fill's) lighting every vertex; rel. MAE of the image
  * (bench/common/image.h) against the reference; fill times from fills of the same grids
  * outside the frame.  Writes DIR/bench_agrid_image.csv:
  * scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae.
  * All from this run.  Usage: bench_agrid [--quick] [--threads N]
- * [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR] (default DIR build/bench). */
+ * [--only wu-fig12|wu-monkey|image] [--image-scenes a,b,...] [--recv-only] [--meshes DIR] [-d DIR]
+ * (default DIR build/bench; --recv-only: the adaptive runs with receivers only). */
 #include "image.h"
 #include "meshes.h"
 #include "prt.h"
@@ -317,6 +321,8 @@ static void image_row(FILE *f, prt *pr, const lighting_method *m, const float *r
     *fill = INFINITY;
     for (int k = 0; k < reps; ++k) {
         const double t0 = bench_now(), c0 = cpu_now();
+        if (ag) must(shl_agrid_set_receivers(ag, m->agrid_receivers ? m->agrid_nreceivers : 0, m->agrid_receivers),
+                     "receivers"); /* timed with the fill: for a static mesh a one-off cost */
         must(ag ? shl_agrid_fill(ag, l, pr->nthreads) : shl_grid_fill(ug, l, pr->nthreads), "fill");
         *fill = fmin(*fill, bench_now() - t0);
         *cpu = fmin(*cpu, cpu_now() - c0);
@@ -337,7 +343,7 @@ static void image_row(FILE *f, prt *pr, const lighting_method *m, const float *r
 }
 
 /* The image error of uniform and adaptive grids on a rendered scene (see the top of the file). */
-static void run_image(FILE *f, const char *file, const char *meshes, int quick, int nthreads)
+static void run_image(FILE *f, const char *file, const char *meshes, int quick, int recv_only, int nthreads)
 {
     printf("\n== %s rendered (image error against the per-vertex reference), lmax %d, %d threads ==\n", file, LMAX,
            nthreads);
@@ -393,32 +399,43 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
     probe_init(&p, ctx, l, nthreads);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
-    const double rel[] = {3e-2, 1e-2, 5e-3, 3e-3, 2e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5};
+    /* with receivers the MEAN criterion is e n_cell / n (a cell's share of the receivers, ~1e-2 of
+     * level 0's volume share on a surface), so its tolerances go 100x lower */
+    const double rels[2][10] = {{3e-2, 1e-2, 5e-3, 3e-3, 2e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5},
+                                {1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 3e-8}};
     const long budgets[] = {3000, 5000, 7000, 9000, 12000, 16000, 24000};
-    const int nrel = sizeof rel / sizeof rel[0], nb = sizeof budgets / sizeof budgets[0];
+    const int nrel = sizeof rels[0] / sizeof rels[0][0], nb = sizeof budgets / sizeof budgets[0];
     m.kind = LM_AGRID;
     m.agrid_criterion = SHL_AGRID_MEAN;
-    long best_nodes = -1;
-    double best_fill = INFINITY, best_cpu = INFINITY;
-    for (int k = 0; k < 2 * nrel + nb; ++k) { /* coarse 4^3 and 8^3 at each tolerance; budgets at 4^3 */
-        m.grid_res = k < nrel || k >= 2 * nrel ? 4 : 8;
-        m.agrid_tol = (k < 2 * nrel ? rel[k % nrel] : 1e-6) * p.mean_ref;
-        m.agrid_budget = k < 2 * nrel ? 32L * 32 * 32 : budgets[k - 2 * nrel];
-        image_row(f, &pr, &m, ref, exposure, img, reps, k < 2 * nrel ? "mean" : "budget", k < 2 * nrel ? rel[k % nrel] : 1e-6,
-                  &mae, &fill, &cpu, &nodes);
-        if (mae <= u32_mae) {
-            if (best_nodes < 0 || nodes < best_nodes) best_nodes = nodes;
-            best_fill = fmin(best_fill, fill);
-            best_cpu = fmin(best_cpu, cpu);
+    for (int rv = recv_only; rv < 2; ++rv) {
+        const double *rel = rels[rv]; /* without, then with the mesh vertices as receivers (shl_agrid_set_receivers) */
+        m.agrid_receivers = rv ? s.geom.pos : NULL;
+        m.agrid_nreceivers = rv ? s.geom.nv : 0;
+        long best_nodes = -1;
+        double best_fill = INFINITY, best_cpu = INFINITY;
+        for (int k = 0; k < 2 * nrel + nb; ++k) { /* coarse 4^3 and 8^3 at each tolerance; budgets at 4^3 */
+            m.grid_res = k < nrel || k >= 2 * nrel ? 4 : 8;
+            const double trel = k < 2 * nrel ? rel[k % nrel] : 1e-12; /* budgets: a tolerance no cell meets */
+            m.agrid_tol = trel * p.mean_ref;
+            m.agrid_budget = k < 2 * nrel ? 32L * 32 * 32 : budgets[k - 2 * nrel];
+            const char *kind = k < 2 * nrel ? (rv ? "mean-recv" : "mean") : rv ? "budget-recv" : "budget";
+            image_row(f, &pr, &m, ref, exposure, img, reps, kind, trel, &mae, &fill, &cpu, &nodes);
+            if (mae <= u32_mae) {
+                if (best_nodes < 0 || nodes < best_nodes) best_nodes = nodes;
+                best_fill = fmin(best_fill, fill);
+                best_cpu = fmin(best_cpu, cpu);
+            }
         }
+        const char *what = rv ? "with receivers" : "without receivers";
+        if (best_nodes < 0)
+            printf("  %s: image rel. MAE <= uniform 32^3's (%.3e): no adaptive run\n", what, u32_mae);
+        else
+            printf("  %s: image rel. MAE <= uniform 32^3's (%.3e): fewest nodes %ld (%.1fx fewer than 32768), least fill "
+                   "time %.1f ms (%.1fx less than 32^3's %.1f ms), least fill CPU time %.1f ms (%.1fx less than 32^3's "
+                   "%.1f ms)\n",
+                   what, u32_mae, best_nodes, 32768.0 / best_nodes, best_fill * 1e3, u32_fill / best_fill, u32_fill * 1e3,
+                   best_cpu * 1e3, u32_cpu / best_cpu, u32_cpu * 1e3);
     }
-    if (best_nodes < 0)
-        printf("  image rel. MAE <= uniform 32^3's (%.3e): no adaptive run\n", u32_mae);
-    else
-        printf("  image rel. MAE <= uniform 32^3's (%.3e): fewest nodes %ld (%.1fx fewer than 32768), least fill time "
-               "%.1f ms (%.1fx less than 32^3's %.1f ms), least fill CPU time %.1f ms (%.1fx less than 32^3's %.1f ms)\n",
-               u32_mae, best_nodes, 32768.0 / best_nodes, best_fill * 1e3, u32_fill / best_fill, u32_fill * 1e3,
-               best_cpu * 1e3, u32_cpu / best_cpu, u32_cpu * 1e3);
     free(p.pts);
     free(p.ref);
     free(p.out);
@@ -434,7 +451,8 @@ int main(int argc, char **argv)
     const char *dir = "build/bench";
     const char *only = NULL, *meshes = getenv(MESHES_ENV);
     if (!meshes || !meshes[0]) meshes = MESHES_DEFAULT_DIR;
-    int quick = 0, nthreads = 2;
+    const char *image_scenes = "wu-fig12,wu-monkey";
+    int quick = 0, recv_only = 0, nthreads = 2;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;
@@ -442,12 +460,17 @@ int main(int argc, char **argv)
             nthreads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = argv[++i];
+        else if (!strcmp(argv[i], "--recv-only"))
+            recv_only = 1;
+        else if (!strcmp(argv[i], "--image-scenes") && i + 1 < argc)
+            image_scenes = argv[++i];
         else if (!strcmp(argv[i], "--meshes") && i + 1 < argc)
             meshes = argv[++i];
         else if (!strcmp(argv[i], "-d") && i + 1 < argc)
             dir = argv[++i];
         else {
-            fprintf(stderr, "usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey|image] [--meshes DIR] [-d DIR]\n");
+            fprintf(stderr, "usage: bench_agrid [--quick] [--threads N] [--only wu-fig12|wu-monkey|image] [--image-scenes "
+                            "a,b,...] [--recv-only] [--meshes DIR] [-d DIR]\n");
             return 2;
         }
     }
@@ -465,8 +488,12 @@ int main(int argc, char **argv)
         snprintf(path, sizeof path, "%s/bench_agrid_image.csv", dir);
         FILE *f = fopen(path, "w");
         if (f) fprintf(f, "scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae\n");
-        run_image(f, "wu-fig12.scene", meshes, quick, nthreads);
-        run_image(f, "wu-monkey.scene", meshes, quick, nthreads);
+        char list[256], file[300];
+        snprintf(list, sizeof list, "%s", image_scenes);
+        for (char *sv = NULL, *tok = strtok_r(list, ",", &sv); tok; tok = strtok_r(NULL, ",", &sv)) {
+            snprintf(file, sizeof file, "%s.scene", tok);
+            run_image(f, file, meshes, quick, recv_only, nthreads);
+        }
         if (f) {
             fclose(f);
             printf("\nCSV: %s\n", path);

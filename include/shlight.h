@@ -337,7 +337,8 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
  * criterion value exceeds tol are refined while the total node count stays
  * <= max_nodes (ring included, below), best first over all levels: by priority
  * p = e 8^-l (the estimate times the cell's volume: its share of the mean error,
- * for both criteria), in rounds that each take the entries within a factor 2 of
+ * for both criteria; the receivers' share instead of the volume if receivers are
+ * set, shl_agrid_set_receivers), in rounds that each take the entries within a factor 2 of
  * the largest priority waiting.  A refined cell's children wait unestimated, as one
  * entry with the bounds that the assumption below gives (e_child <= e, so priority
  * <= p / 8 and, for SHL_AGRID_MEAN, criterion <= e 8^-l / 8: dropped if that is
@@ -427,6 +428,25 @@ int shl_agrid_fill(shl_agrid *grid, const shl_lights *lights, int nthreads);
 int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double *rgb, int nthreads);
 /** Node count, bytes, levels and the last fill's estimate summary (shl_agrid_stats). */
 int shl_agrid_get_stats(const shl_agrid *grid, shl_agrid_stats *stats);
+/**
+ * Optional receivers: the npts >= 0 points pts[3*p .. 3*p+2] the grid will be
+ * interpolated at (e.g. a scene's mesh vertices), for the next fills; npts = 0
+ * removes them (pts may then be NULL).  With receivers, the weight of a cell of
+ * level l in the refinement (above) is the fraction of the receivers it holds,
+ * instead of its volume 8^-l: priority p = e n_cell / n, the SHL_AGRID_MEAN
+ * criterion e n_cell / n (the cell's share of the mean error over the receivers),
+ * pending children bounded by e max_j n_child_j / n; a cell holding no receiver
+ * is never estimated nor refined (it keeps level 0's, or its ring's, data); the
+ * estimate's two samples are the cell's receivers at 1/4 and 3/4 of its list (in
+ * Morton order of their finest-level cells), rounded to float, instead of the
+ * fixed points (the error where the grid is used, not off the surfaces).  A
+ * receiver belongs to the half-open cells containing it, points outside the box
+ * to those their clamped position falls in (as shl_agrid_interp clamps); the grid
+ * keeps a copy (a key and the float point, 24 bytes per receiver, in stats.bytes).  Errors
+ * leave the grid unchanged: SHL_ENULL (grid, or pts with npts > 0), SHL_EDOMAIN
+ * (npts < 0), SHL_ENONFINITE, SHL_ENOMEM.
+ */
+int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts);
 
 /* ---- spherical lights (Mezieres et al. 2022, "HVL", Sec. 4.2) ---------- */
 /**

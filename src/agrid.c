@@ -122,27 +122,17 @@ static int add_node(shl__alevel *L, const int i[3], size_t node_len)
 {
     if (L->nnodes == L->node_cap) {
         const size_t cap = L->node_cap ? 2 * L->node_cap : 256;
-        /* all three grown before any is swapped in, so that a failure leaves L consistent */
-        uint64_t *k = shl__malloc(cap * sizeof *k);
-        float *d = shl__malloc(cap * node_len * sizeof *d);
-        unsigned char *f = shl__malloc(cap);
-        if (!k || !d || !f) {
-            shl__free(k);
-            shl__free(d);
-            shl__free(f);
-            return SHL_ENOMEM;
-        }
-        if (L->nnodes) {
-            memcpy(k, L->node_key, L->nnodes * sizeof *k);
-            memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
-            memcpy(f, L->flag, L->nnodes);
-        }
-        shl__free(L->node_key);
-        shl__free(L->data);
-        shl__free(L->flag);
+        /* realloc (large blocks move by remapping, not copying); each array is swapped in
+         * as it grows and node_cap set only when all three have: a failure leaves L consistent */
+        uint64_t *k = shl__realloc(L->node_key, cap * sizeof *k);
+        if (!k) return SHL_ENOMEM;
         L->node_key = k;
-        L->data = d;
+        unsigned char *f = shl__realloc(L->flag, cap);
+        if (!f) return SHL_ENOMEM;
         L->flag = f;
+        float *d = shl__realloc(L->data, cap * node_len * sizeof *d);
+        if (!d) return SHL_ENOMEM;
+        L->data = d;
         L->node_cap = L->data_cap = cap;
     }
     if (hreserve(&L->nodes)) return SHL_ENOMEM;
@@ -299,16 +289,94 @@ int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double 
     return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
 }
 
+/* ---- receivers ---- */
+
+/* The bits of x < 2^21 spread to every third bit. */
+static uint64_t spread3(uint64_t x)
+{
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFu;
+    x = (x | x << 16) & 0x1F0000FF0000FFu;
+    x = (x | x << 8) & 0x100F00F00F00F00Fu;
+    x = (x | x << 4) & 0x10C30C30C30C30C3u;
+    x = (x | x << 2) & 0x1249249249249249u;
+    return x;
+}
+
+/* Morton key of lattice cell c: the cells of level l + s inside cell c of level l
+ * are the keys (key << 3s) .. ((key + 1) << 3s) - 1, a contiguous range. */
+static uint64_t morton(const int c[3])
+{
+    return spread3((uint64_t)c[0]) | spread3((uint64_t)c[1]) << 1 | spread3((uint64_t)c[2]) << 2;
+}
+
+typedef struct shl__arecv keyed;
+
+static int by_key(const void *pa, const void *pb)
+{
+    const keyed *a = pa, *b = pb;
+    if (a->key != b->key) return (a->key > b->key) - (a->key < b->key);
+    return memcmp(a->x, b->x, sizeof a->x); /* a total order: the result does not depend on qsort */
+}
+
+/* Receivers with key < k. */
+static size_t below(const shl_agrid *g, uint64_t k)
+{
+    size_t lo = 0, hi = g->nrecv;
+    while (lo < hi) {
+        const size_t m = lo + (hi - lo) / 2;
+        if (g->recv[m].key < k) lo = m + 1;
+        else hi = m;
+    }
+    return lo;
+}
+
+/* The weight of cell c of level l in the refinement priority: the fraction of the
+ * receivers it holds, or without receivers its volume in coarse-cell units 8^-l. */
+static double cell_weight(const shl_agrid *g, int l, const int c[3])
+{
+    if (!g->recv) return ldexp(1.0, -3 * l);
+    const int s = 3 * (g->max_levels - 1 - l);
+    const uint64_t k = morton(c);
+    return (double)(below(g, (k + 1) << s) - below(g, k << s)) / (double)g->nrecv;
+}
+
+int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts)
+{
+    if (!grid || (npts > 0 && !pts)) return SHL_ENULL;
+    if (npts < 0) return SHL_EDOMAIN;
+    for (int p = 0; p < npts; ++p)
+        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    keyed *k = NULL;
+    if (npts > 0 && !(k = shl__malloc((size_t)npts * sizeof *k))) return SHL_ENOMEM;
+    const int top = grid->max_levels - 1;
+    for (int p = 0; p < npts; ++p) {
+        int c[3];
+        for (int a = 0; a < 3; ++a) { /* the finest level's cell, clamped to the box as shl_agrid_interp clamps */
+            const int n = (grid->res[a] - 1) << top;
+            const double t = floor((pts[3 * p + a] - grid->lo[a]) / (grid->hi[a] - grid->lo[a]) * n);
+            c[a] = t < 0.0 ? 0 : t >= n ? n - 1 : (int)t;
+            const double x = fmin(fmax(pts[3 * p + a], grid->lo[a]), grid->hi[a]);
+            k[p].x[a] = (float)x;
+        }
+        k[p].key = morton(c);
+    }
+    if (npts > 0) qsort(k, (size_t)npts, sizeof *k, by_key);
+    shl__free(grid->recv);
+    grid->recv = k;
+    grid->nrecv = (size_t)npts;
+    return SHL_OK;
+}
+
 /* ---- fill ---- */
 
 enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
 
-/* A cell (index in its level), its estimate or criterion value e and its
- * refinement priority p = e 8^-l (e times its volume in coarse-cell units); or, if
- * pending, a refined cell whose children are not estimated yet, e and p bounds on
- * theirs (build()). */
+/* A cell (index in its level), its estimate e, its weight w (cell_weight) and its
+ * refinement priority p = e w; or, if pending, a refined cell whose children are not
+ * estimated yet, e and p bounds on theirs (build()). */
 typedef struct {
-    double e, p;
+    double e, p, w;
     uint32_t cell;
     int level, pending;
 } ranked;
@@ -324,6 +392,8 @@ typedef struct {
     size_t nwhich;
     char *ws;
     size_t stride, batch_bytes;
+    char *wsbuf;    /* run(): the workspaces, kept across a fill's passes (grown when too small) */
+    size_t wsbytes;
 } fill_job;
 
 /* The new nodes of every level, blocks of BLOCK consecutive nodes of one level,
@@ -371,9 +441,16 @@ static void estimate_range(void *arg, int worker, long begin, long end)
             const shl__alevel *L = job->lev + r->level;
             int c[3];
             unkey(L->cell_key[r->cell], c);
+            size_t b0 = 0, b1 = 0;
+            if (g->recv) {
+                const int sh = 3 * (g->max_levels - 1 - r->level);
+                b0 = below(g, morton(c) << sh);
+                b1 = below(g, (morton(c) + 1) << sh);
+            }
             for (int q = 0; q < SAMPLES; ++q)
-                for (int k = 0; k < 3; ++k)
-                    pts[3 * (SAMPLES * j + q) + k] = (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
+                for (int k = 0; k < 3; ++k) /* with receivers, the ones at 1/4 and 3/4 of the cell's (Morton) list */
+                    pts[3 * (SAMPLES * j + q) + k] = g->recv ? g->recv[b0 + (b1 - b0) * (q ? 3 : 1) / 4].x[k]
+                                                           : (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
         }
         shl__lights_batch_f_block(&job->ctx, job->lights, SAMPLES * mc, pts, rgb, nv, NULL, 0,
                                   job->batch_bytes ? w : NULL);
@@ -402,12 +479,16 @@ static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size
     if (nblocks == 0) return SHL_OK;
     const int nw = shl__parallel_workers(nblocks, 1, nthreads);
     job->stride = shl__ws_stride(shl__ws_stride(job->batch_bytes) + extra);
-    job->ws = NULL;
-    if (job->stride && !(job->ws = shl__malloc(job->stride * (size_t)nw))) return SHL_ENOMEM;
-    const int st = shl__parallel_for(nblocks, 1, nw, fn, job);
-    shl__free(job->ws);
-    job->ws = NULL;
-    return st;
+    const size_t need = job->stride * (size_t)nw;
+    if (need > job->wsbytes) { /* a fresh block per pass costs page faults at every round */
+        char *w = shl__malloc(need);
+        if (!w) return SHL_ENOMEM;
+        shl__free(job->wsbuf);
+        job->wsbuf = w;
+        job->wsbytes = need;
+    }
+    job->ws = job->wsbuf;
+    return shl__parallel_for(nblocks, 1, nw, fn, job);
 }
 
 /* The nodes of levels 0..nl-1 not yet evaluated, in one parallel pass. */
@@ -429,6 +510,12 @@ static int estimate_cells(fill_job *job, ranked *which, size_t nwhich, int nthre
     const size_t nv = 3 * (size_t)job->g->nc;
     const long n = (long)((nwhich + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
     return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
+}
+
+/* The criterion value of r: e (SHL_AGRID_MAX) or its share of the mean error p (SHL_AGRID_MEAN). */
+static double crit(const shl_agrid *g, const ranked *r)
+{
+    return g->criterion == SHL_AGRID_MEAN ? r->p : r->e;
 }
 
 static int by_estimate(const void *pa, const void *pb)
@@ -473,10 +560,8 @@ static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint
 /* The node data of a filled level cut to its node count (kept as is if that allocation fails). */
 static void trim_data(shl__alevel *L, size_t node_len)
 {
-    float *d = shl__malloc(L->nnodes * node_len * sizeof *d);
+    float *d = L->nnodes ? shl__realloc(L->data, L->nnodes * node_len * sizeof *d) : NULL;
     if (!d) return;
-    memcpy(d, L->data, L->nnodes * node_len * sizeof *d);
-    shl__free(L->data);
     L->data = d;
     L->data_cap = L->nnodes;
 }
@@ -496,7 +581,7 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
         st->cells += (long)lev[l].ncells;
         bytes += level_bytes(lev + l, g->node_len);
     }
-    st->bytes = (long long)bytes;
+    st->bytes = (long long)(bytes + g->nrecv * sizeof(struct shl__arecv));
 }
 
 /* Room for n more entries in the growable array *p (size *cap, used elements used). */
@@ -535,17 +620,21 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
     int unknown = g->max_levels < 2; /* cells left unestimated: on the finest level, or children still waiting */
     if (!status && !unknown && !(status = reserve(&est, &ecap, 0, lev[0].ncells)))
-        for (size_t c = 0; c < lev[0].ncells; ++c) est[ne++] = (ranked){0.0, 0.0, (uint32_t)c, 0, 0};
+        for (size_t c = 0; c < lev[0].ncells; ++c) {
+            int ci[3];
+            unkey(lev[0].cell_key[c], ci);
+            const double w = cell_weight(g, 0, ci);
+            if (w > 0.0) est[ne++] = (ranked){0.0, 0.0, w, (uint32_t)c, 0, 0}; /* a cell without receivers: never refined */
+        }
     while (!status) {
         /* the new cells' estimates; criterion values above tol join the queue */
         if ((status = estimate_cells(&job, est, ne, nthreads)) || (status = reserve(&queue, &qcap, nq, ne))) break;
         st->samples += SAMPLES * (long)ne;
         for (size_t k = 0; k < ne; ++k) {
             ranked r = est[k];
-            r.p = ldexp(r.e, -3 * r.level); /* the cell's volume / h_0^3 */
-            if (g->criterion == SHL_AGRID_MEAN) r.e = r.p;
-            if (r.e > g->tol) queue[nq++] = r;
-            else st->max_estimate = fmax(st->max_estimate, r.e);
+            r.p = r.e * r.w;
+            if (crit(g, &r) > g->tol) queue[nq++] = r;
+            else st->max_estimate = fmax(st->max_estimate, crit(g, &r));
         }
         ne = 0;
         if (nq == 0 || st->budget_hit) break;
@@ -565,7 +654,8 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                 for (int j = 0; j < 8; ++j) {
                     int cc[3];
                     for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
-                    est[ne++] = (ranked){0.0, 0.0, (uint32_t)hfind(&lev[l + 1].cells, key3(cc)), l + 1, 0};
+                    const double w = cell_weight(g, l + 1, cc);
+                    if (w > 0.0) est[ne++] = (ranked){0.0, 0.0, w, (uint32_t)hfind(&lev[l + 1].cells, key3(cc)), l + 1, 0};
                 }
                 continue;
             }
@@ -592,19 +682,26 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
         if ((status = eval_nodes(&job, *nl, nthreads))) break;
         /* a refined cell's children wait in the queue, unestimated, as one pending entry
          * with the bounds the assumption that refinement does not increase e gives
-         * (include/shlight.h): e_child <= e, so p_child <= p / 8 and, for
-         * SHL_AGRID_MEAN, criterion <= e / 8 (dropped if that is <= tol); they are
-         * estimated when the entry reaches the head (never, if the budget runs out
-         * first).  Children on the finest level allowed are not estimated. */
+         * (include/shlight.h): e_child <= e, so p_child <= e max_j w_j (= p / 8 without
+         * receivers) and, for SHL_AGRID_MEAN, criterion <= that (dropped if <= tol);
+         * they are estimated when the entry reaches the head (never, if the budget runs
+         * out first).  Children on the finest level allowed are not estimated. */
         if ((status = reserve(&queue, &qcap, nq, nd))) break;
         for (size_t d = 0; d < nd; ++d) {
             if (done[d].level + 2 >= g->max_levels) {
                 unknown = 1;
                 continue;
             }
-            const ranked r = {g->criterion == SHL_AGRID_MEAN ? done[d].e / 8.0 : done[d].e, done[d].p / 8.0, done[d].cell,
-                              done[d].level, 1};
-            if (r.e > g->tol) queue[nq++] = r;
+            int ci[3];
+            unkey(lev[done[d].level].cell_key[done[d].cell], ci);
+            double w = 0.0;
+            for (int j = 0; j < 8; ++j) {
+                int cc[3];
+                for (int a = 0; a < 3; ++a) cc[a] = 2 * ci[a] + ((j >> a) & 1);
+                w = fmax(w, cell_weight(g, done[d].level + 1, cc));
+            }
+            const ranked r = {done[d].e, done[d].e * w, w, done[d].cell, done[d].level, 1};
+            if (crit(g, &r) > g->tol) queue[nq++] = r;
         }
     }
     if (!status) {
@@ -614,7 +711,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                 unknown = 1;
                 continue;
             }
-            st->max_estimate = fmax(st->max_estimate, queue[k].e);
+            st->max_estimate = fmax(st->max_estimate, crit(g, queue + k));
             ++real;
         }
         st->unresolved = unknown ? -1 : real;
@@ -624,6 +721,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     shl__free(queue);
     shl__free(est);
     shl__free(done);
+    shl__free(job.wsbuf);
     return status;
 }
 
@@ -703,6 +801,7 @@ void shl_agrid_destroy(shl_agrid *grid)
 {
     if (!grid) return;
     free_levels(grid->lev, grid->nlevels);
+    shl__free(grid->recv);
     shl__free(grid);
 }
 

@@ -39,6 +39,11 @@ typedef struct {
     size_t ncells, cell_cap;
 } shl__alevel;
 
+struct shl__arecv {
+    uint64_t key;
+    float x[3];
+};
+
 struct shl_agrid {
     int lmax, nc, res[3];
     double lo[3], hi[3], tol;
@@ -50,6 +55,9 @@ struct shl_agrid {
     int nlevels;
     shl__alevel lev[SHL_AGRID_LEVELS_MAX];
     shl_agrid_stats stats;
+    struct shl__arecv *recv; /* shl_agrid_set_receivers: Morton keys of the receivers' cells on level
+                              max_levels - 1 and the receivers (float, clamped to the box), ascending (NULL: none) */
+    size_t nrecv;
 };
 
 #endif

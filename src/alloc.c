@@ -45,4 +45,9 @@ void *shl__calloc_large(size_t count, size_t size)
     return p;
 }
 
+void *shl__realloc(void *ptr, size_t size)
+{
+    return alloc_should_fail() ? NULL : realloc(ptr, size);
+}
+
 void shl__free(void *ptr) { free(ptr); }

@@ -52,6 +52,7 @@ void shl__batch_sphere_eval(const shl_ctx *ctx, const double center[3], double r
  * tests can inject failures; not part of the public API. */
 void *shl__malloc(size_t size);
 void *shl__calloc(size_t count, size_t size);
+void *shl__realloc(void *ptr, size_t size); /* realloc: NULL on failure, ptr then unchanged */
 void shl__free(void *ptr);
 /* shl__calloc for the large arrays read at random (grid nodes): from
  * SHL__LARGE_ARRAY bytes on, aligned to SHL__HUGE_PAGE and advised to the

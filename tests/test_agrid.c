@@ -4,6 +4,7 @@
  * independence, a light inside the box refined around instead of blurred, and
  * budget-driven (best-first) fills. */
 #include "harness.h"
+#include "agrid.h"    /* shl__alevel: the refined cells */
 #include "internal.h" /* shl__alloc_fail_after, shl__thread_fail_after */
 #include "testutil.h"
 #include <float.h>
@@ -482,6 +483,101 @@ SHL_TEST(agrid_budget_best_first)
         free(b);
         shl_grid_destroy(u);
         shl_agrid_destroy(g);
+    }
+    free(pts);
+    free(a);
+    free(ref);
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
+/* Level-l cell index (clamped to the box) of point x, coarse 4^3 on box_lo..box_hi. */
+static int cell_of(double x, int l)
+{
+    const int n = 3 << l;
+    const int c = (int)floor((x - box_lo[0]) / (box_hi[0] - box_lo[0]) * n);
+    return c < 0 ? 0 : c >= n ? n - 1 : c;
+}
+
+/* Whether a refined cell (the parent of a level-l cell all of whose corners are flagged,
+ * src/agrid.h) of grid g holds one of the np points pts. */
+static int refined_cells_hold(const shl_agrid *g, int np, const double *pts, int *outside)
+{
+    int ok = 1;
+    *outside = 0;
+    for (int l = 1; l < g->nlevels; ++l) {
+        const shl__alevel *L = g->lev + l;
+        for (size_t c = 0; c < L->ncells; ++c) {
+            if (L->cell[c].flags != 0xFF) continue;
+            const uint64_t k = L->cell_key[c] - 1, m = ((uint64_t)1 << 21) - 1;
+            const int pc[3] = {(int)(k >> 42) >> 1, (int)(k >> 21 & m) >> 1, (int)(k & m) >> 1};
+            int held = 0;
+            for (int p = 0; p < np && !held; ++p)
+                held = cell_of(pts[3 * p], l - 1) == pc[0] && cell_of(pts[3 * p + 1], l - 1) == pc[1] &&
+                       cell_of(pts[3 * p + 2], l - 1) == pc[2];
+            ok &= held;
+            *outside |= box_lo[0] + pc[0] * (box_hi[0] - box_lo[0]) / (3 << (l - 1)) >= 0.0; /* wholly in x >= 0 */
+        }
+    }
+    return ok;
+}
+
+/* Receivers (shl_agrid_set_receivers) only in the half x < 0 of the box, the
+ * two-sided quad of inside_light() in the other half (x = 0.3), MEAN criterion, a
+ * tolerance no cell meets and budgets 1000, 4000, 16000 ("the best N nodes"):
+ * (1) every refined cell holds a receiver (checked against the receivers directly,
+ * src/agrid.h's layout), none lies wholly in x >= 0, where the fill without
+ * receivers does refine (around the light); (2) the mean error at the receivers
+ * against shl_lights_eval (double) falls as the budget grows 4x, and is below that
+ * of the same budget's fill without receivers.  Both comparative, strict, no
+ * tolerance (the ratios are noted).  Bad input and a failed allocation: nothing changes. */
+SHL_TEST(agrid_receivers_refine_their_half)
+{
+    shl_ctx *ctx = ctx_new();
+    shl_lights *l = inside_light();
+    const int r4[3] = {4, 4, 4};
+    enum { NP = 2000 };
+    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
+    const double lmax_norm = reference_points(ctx, l, NP, 29, pts, ref);
+    for (int p = 0; p < NP; ++p) pts[3 * p] = -0.5 * (pts[3 * p] + 1.0); /* x in (-1, 0] */
+    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
+    const long budgets[3] = {1000, 4000, 16000};
+    double prev = INFINITY;
+    for (int i = 0; i < 3; ++i) {
+        double e[2];
+        shl_agrid_stats sw = {0};
+        for (int with = 1; with >= 0; --with) {
+            shl_agrid *g;
+            shl_agrid_stats st;
+            CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1e-9 * lmax_norm, budgets[i], &g) == SHL_OK);
+            if (with) {
+                const double nan_pt[3] = {0.0, NAN, 0.0};
+                CHECK(shl_agrid_set_receivers(g, 1, nan_pt) == SHL_ENONFINITE && g->recv == NULL);
+                CHECK(shl_agrid_set_receivers(g, -1, pts) == SHL_EDOMAIN && shl_agrid_set_receivers(g, 1, NULL) == SHL_ENULL);
+                CHECK(shl_agrid_set_receivers(NULL, 0, NULL) == SHL_ENULL && g->recv == NULL);
+                shl__alloc_fail_after = 0;
+                const int oom = shl_agrid_set_receivers(g, NP, pts);
+                shl__alloc_fail_after = -1;
+                CHECK(oom == SHL_ENOMEM && g->recv == NULL);
+                CHECK(shl_agrid_set_receivers(g, NP, pts) == SHL_OK);
+            }
+            CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
+            CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+            CHECK(st.budget_hit == 1 && st.nodes <= budgets[i] && st.levels >= 2);
+            int outside;
+            const int held = refined_cells_hold(g, NP, pts, &outside);
+            CHECK(with ? held && !outside : outside);
+            CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
+            e[with] = 0.0;
+            for (int p = 0; p < NP; ++p) e[with] += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
+            if (with) sw = st;
+            shl_agrid_destroy(g);
+        }
+        CHECK(e[1] < prev && e[1] < e[0]);
+        harness_note("budget %ld with receivers: %ld nodes, %d levels, %ld samples; mean err at the receivers %.3e max|L| "
+                     "(without receivers %.3e: ratio %.2f)",
+                     budgets[i], sw.nodes, sw.levels, sw.samples, e[1] / lmax_norm, e[0] / lmax_norm, e[1] / e[0]);
+        prev = e[1];
     }
     free(pts);
     free(a);

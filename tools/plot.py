@@ -361,7 +361,8 @@ def agrid(rows, out):
 def agrid_image(rows, out):
     """bench/bench_agrid.c, rendered scenes: image rel. MAE vs nodes and vs fill time, uniform grids and
     adaptive ones (tolerance-driven per coarse resolution, budget-driven), uniform 32^3's error dashed."""
-    styles = (("uniform", "o", "tab:blue", "-"), ("mean", "^", "tab:green", ":"), ("budget", "v", "tab:orange", "-"))
+    styles = (("uniform", "o", "tab:blue", "-"), ("mean", "^", "tab:green", ":"), ("budget", "v", "tab:orange", "-"),
+              ("mean-recv", "s", "tab:red", ":"), ("budget-recv", "D", "tab:purple", "-"))  # -recv: shl_agrid_set_receivers
     for scene in OrderedDict((r["scene"], 1) for r in rows):
         srows = [r for r in rows if r["scene"] == scene]
         u32 = [float(r["rel_mae"]) for r in srows if r["kind"] == "uniform" and r["res"] == "32"]
@@ -373,8 +374,10 @@ def agrid_image(rows, out):
                     pts = sorted((float(r[xkey]) * (1e3 if xkey == "fill_s" else 1.0), float(r["rel_mae"]))
                                  for r in srows if r["kind"] == kind and res in (None, r["res"]))
                     label = kind if kind == "uniform" else f"{kind}, coarse {res}^3"
+                    if not pts:
+                        continue
                     ax.plot(*zip(*pts), marker=marker, color=color, linestyle=ls, label=label,
-                            alpha=1.0 if kind != "mean" or res == "4" else 0.55)
+                            alpha=1.0 if not kind.startswith("mean") or res == "4" else 0.55)
             if u32:
                 ax.axhline(u32[0], color="tab:blue", linestyle="--", linewidth=0.8, label="uniform 32^3")
             ax.set_xscale("log")

@@ -32,6 +32,8 @@ typedef struct {
     int agrid_criterion;                /* AGRID (coarse resolution grid_res): SHL_AGRID_MAX / MEAN, */
     double agrid_tol;                   /* its tolerance (absolute) */
     long agrid_budget;                  /* and node budget */
+    const double *agrid_receivers;      /* AGRID: receivers (shl_agrid_set_receivers), NULL: none */
+    int agrid_nreceivers;
     double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR; SINGLE / TAYLOR1 with npoints > 1 */
     long mc_samples;                    /* MC */
     int mc_stratified;                  /* MC, polygon lights only: about mc_samples jittered strata split over
