@@ -4,6 +4,8 @@
  * double and float. */
 #include "sphere.h"
 
+#include <float.h>
+
 /* Bands with an unrolled value kernel (sphere_small in sphere_impl.h). */
 #define SHL__SPHERE_SMALL 5
 #define SHL__ALWAYS_INLINE __attribute__((always_inline)) inline
@@ -88,6 +90,83 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     shl__pow2_split(-e, g->grad_scale);                /* d/dx = 2^-e d/dx_scaled */
     g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
     g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
+}
+
+/* The float entry points' set-up, in double from the float arguments: every
+ * difference c_k - x_k is 0 or of magnitude in [2^-149, 2^129], so every value below
+ * (d2 in [2^-298, 2^260], r in [2^-149, 2^128), their products and quotients) is a
+ * normal double: no scaling, and the results are exact under a power-of-two scaling of
+ * the arguments (u, t, s2, c unchanged).  The inside test is geom_units' (the same
+ * ds <= r).  The chain is shorter than geom_units': 1/d2 and the two square roots
+ * depend only on d2, where geom_units' cos a waits on sqrt(d2), 1/ds and a second
+ * sqrt.  Errors (eps = 2^-53): d2 within 3 eps (v's rounding included), r2 = r r
+ * exact (r a float), d2 - r2 exact near tangency (Sterbenz), so cos a = sqrt(d2 - r2) / d
+ * is within ~(3/4) eps r / gap (gap = d - r), geom_units' within ~eps r / gap (ds's
+ * rounding, amplified by d / (d - r)); u, s2, t within 4 eps away from tangency: far
+ * below the float rounding of the kernels' inputs. */
+static inline void geom_units_f(shl__sphere_geom *g, const double v[3], double d2, double r)
+{
+    const double ds = sqrt(d2);
+    g->inside = ds <= r;
+    if (g->inside) return;
+    const double inv2 = 1.0 / d2, e2 = d2 - r * r; /* e2 > 0: ds > r implies d2 > r^2 */
+    const double inv = ds * inv2;                      /* 1 / d */
+    for (int k = 0; k < 3; ++k) g->u[k] = v[k] * inv;
+    g->s2 = r * r * inv2;                              /* sin^2 a */
+    g->c = sqrt(e2) * inv;                             /* cos a = sqrt(d^2 - r^2) / d */
+    g->t = g->s2 / (1.0 + g->c);                       /* 1 - cos a without cancellation */
+    g->inv_d_s = inv;
+}
+
+/* shl__sphere_geom_init for the float entry points (geom_units_f), their arguments
+ * finite and the radius > 0: the gradient's factors unscaled where moderate() holds
+ * (as there), else in units of 2^e with e the exponent of the largest |c_k - x_k|
+ * (exact powers of two: the float kernels' results scale with them). */
+static void geom_init_f(shl__sphere_geom *g, const double x[3], const double center[3], double radius)
+{
+    const double v[3] = {center[0] - x[0], center[1] - x[1], center[2] - x[2]};
+    geom_units_f(g, v, shl__dot3(v, v), radius);
+    if (g->inside) return;
+    int e = 0;
+    if (!moderate(v, radius)) { /* v != 0: outside */
+        e = INT_MIN;
+        for (int k = 0; k < 3; ++k)
+            if (v[k] != 0.0 && shl__ilogb(v[k]) > e) e = shl__ilogb(v[k]);
+    }
+    g->inv_d_s = shl__ldexp(g->inv_d_s, e);
+    g->k_alpha_s = g->s2 / g->c * g->inv_d_s;
+    shl__pow2_split(-e, g->grad_scale);
+    g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
+    g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
+}
+
+/* The entry points' common-case set-up (sphere_impl.h): 1 when the arguments need no
+ * further check (and then, if need, g is set up unscaled), 0 for the general path.
+ * Double: moderate() (sphere.c's top). */
+static SHL__ALWAYS_INLINE int entry_geom_d(shl__sphere_geom *g, const double xd[3], const double cd[3], double radius,
+                                           int want_grad, int need)
+{
+    (void)want_grad;
+    const double vs[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
+    const int mod = moderate(vs, radius);
+    if (mod && need) geom_units(g, vs, radius);
+    return mod;
+}
+/* Float: finite arguments and a radius in (0, FLT_MAX] suffice for the coefficients
+ * (d2 finite exactly when every coordinate is: a float difference cannot overflow a
+ * double); the gradient's kernels take unscaled factors, so it also needs moderate(). */
+static SHL__ALWAYS_INLINE int entry_geom_f(shl__sphere_geom *g, const double xd[3], const double cd[3], double radius,
+                                           int want_grad, int need)
+{
+    const double v[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
+    const double d2 = shl__dot3(v, v);
+    const int ok = (d2 <= DBL_MAX) & (radius > 0.0) & (radius <= FLT_MAX) & (!want_grad || moderate(v, radius));
+    if (ok && need) geom_units_f(g, v, d2, radius);
+    return ok;
+}
+static inline void geom_init_d(shl__sphere_geom *g, const double x[3], const double center[3], double radius)
+{
+    shl__sphere_geom_init(g, x, center, radius);
 }
 
 static int check_radius(double radius)

@@ -1,5 +1,5 @@
 /* Spherical-light kernels and the entry points' bodies (sphere_d, sphere_f; they
- * use moderate, geom_units and check_radius of sphere.c), instantiated by sphere.c
+ * use entry_geom, geom_init and check_radius of sphere.c), instantiated by sphere.c
  * for REAL = double and float, with the public entry points shl_sphere[_grad][_f];
  * SUFFIX(name) names the instance, TAB(name) its factor table (sh_tables.c); the
  * SH basis kernels are in sh_basis_impl.h. */
@@ -247,48 +247,46 @@ void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, R
 }
 
 /* The rest of the entry points (sphere_d, sphere_f): argument checks unless
- * moderate, shl__sphere_geom_init, shl__sphere_sh; out of line, so that the common
- * paths need no frame for it.  The geometry in double from the arguments (exact). */
+ * checked, geom_init (shl__sphere_geom_init, resp. geom_init_f), shl__sphere_sh; out
+ * of line, so that the common paths need no frame for it.  The geometry in double
+ * from the arguments (exact). */
 static SHL__NOINLINE int SUFFIX(sphere_general)(int lmax, const REAL x[3], const REAL center[3], REAL radius,
-                                                REAL *coeffs, REAL *grad, int mod)
+                                                REAL *coeffs, REAL *grad, int checked)
 {
     const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
-    if (!mod) {
+    if (!checked) {
         if (shl__check_finite(xd, 3) || shl__check_finite(cd, 3)) return SHL_ENONFINITE;
         const int st = check_radius(radius);
         if (st) return st;
     }
     shl__sphere_geom g;
-    shl__sphere_geom_init(&g, xd, cd, radius);
+    SUFFIX(geom_init)(&g, xd, cd, radius);
     SUFFIX(shl__sphere_sh)(lmax, &g, coeffs, grad);
     return SHL_OK;
 }
 
-/* The entry points.  moderate() implies finite x and centre and a finite radius > 0,
- * so in the common case no further check is needed and no scaling (the exponent e
- * of shl__sphere_geom_init is 0); coefficients without gradient, and with it up to
- * band SHL__SPHERE_SMALL, then take their geometry to the kernels in registers (the
- * address of g is never taken). */
+/* The entry points.  entry_geom (sphere.c) true implies finite x and centre and a
+ * finite radius > 0, so in the common case no further check is needed and no
+ * scaling (the exponent e of shl__sphere_geom_init is 0); coefficients without
+ * gradient, and with it up to band SHL__SPHERE_SMALL, then take their geometry to the
+ * kernels in registers (the address of g is never taken). */
 static SHL__ALWAYS_INLINE int SUFFIX(sphere)(const shl_ctx *ctx, const REAL x[3], const REAL center[3], REAL radius,
                                              REAL *coeffs, REAL *grad, int want_grad)
 {
     if (!ctx || !x || !center || !coeffs || (want_grad && !grad)) return SHL_ENULL;
     const double xd[3] = {x[0], x[1], x[2]}, cd[3] = {center[0], center[1], center[2]};
-    const double vs[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
-    const int mod = moderate(vs, radius);
-    if (mod && !want_grad) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        SUFFIX(sphere_value)(ctx->lmax, &g, coeffs);
+    const int lmax = ctx->lmax;
+    shl__sphere_geom g;
+    const int ok = SUFFIX(entry_geom)(&g, xd, cd, radius, want_grad, !want_grad || lmax <= SHL__SPHERE_SMALL);
+    if (ok && !want_grad) {
+        SUFFIX(sphere_value)(lmax, &g, coeffs);
         return SHL_OK;
     }
-    if (mod && ctx->lmax <= SHL__SPHERE_SMALL) {
-        shl__sphere_geom g;
-        geom_units(&g, vs, radius);
-        SUFFIX(sphere_grad_small)(ctx->lmax, &g, coeffs, grad);
+    if (ok && lmax <= SHL__SPHERE_SMALL) {
+        SUFFIX(sphere_grad_small)(lmax, &g, coeffs, grad);
         return SHL_OK;
     }
-    return SUFFIX(sphere_general)(ctx->lmax, x, center, radius, coeffs, want_grad ? grad : NULL, mod);
+    return SUFFIX(sphere_general)(lmax, x, center, radius, coeffs, want_grad ? grad : NULL, ok);
 }
 
 int PUBLIC(shl_sphere)(const shl_ctx *ctx, const REAL x[3], const REAL center[3], REAL radius, REAL *coeffs)

@@ -272,6 +272,43 @@ SHL_TEST(sphere_tangent_and_inside)
     shl_ctx_destroy(ctx);
 }
 
+/* The float entry points' set-up (geom_units_f, src/sphere.c) near tangency: x at
+ * distance r (1 + 10^-e), e = 1..6, rounded to float (the gap moves by at most
+ * ~4e-7, below 1.5e-6), against the quadrature at the float-rounded geometry.  Bound
+ * 1e-5 of max|coeff|, the float contract (sphere_float_random): the set-up's own error
+ * in cos a, ~eps r / gap <= 1e-10 relative (double arithmetic, sphere.c), is far
+ * below the float rounding of the kernels' inputs.  shl_sphere_grad_f's
+ * coefficients must equal shl_sphere_f's bit for bit (the same set-up). */
+SHL_TEST(sphere_float_tangent)
+{
+    shl_ctx *ctx = ctx_or_die(L);
+    const float cf[3] = {0.5f, -0.25f, 2.0f}, rf = 1.5f;
+    const double c[3] = {cf[0], cf[1], cf[2]};
+    rng_t r = {31};
+    double worst = 0.0;
+    int bad = 0;
+    for (int e = 1; e <= 6; ++e)
+        for (int it = 0; it < 4; ++it) {
+            static float got[NC], got2[NC], g[3 * NC];
+            double dir[3], x[3], gd[NC], want[NC];
+            float xf[3];
+            rng_unit_vector(&r, dir);
+            const double d = rf * (1.0 + pow(10.0, -e));
+            for (int k = 0; k < 3; ++k) x[k] = xf[k] = (float)(c[k] - d * dir[k]);
+            CHECK(shl_sphere_f(ctx, xf, cf, rf, got) == SHL_OK);
+            CHECK(shl_sphere_grad_f(ctx, xf, cf, rf, got2, g) == SHL_OK);
+            bad += memcmp(got, got2, sizeof got) != 0;
+            capref_sphere(L, x, c, rf, want);
+            for (int k = 0; k < NC; ++k) gd[k] = got[k];
+            worst = fmax(worst, rel_err(gd, want, NC));
+        }
+    CHECK(bad == 0);
+    CHECK(worst < 1e-5);
+    harness_note("float, gap 1e-1..1e-6 r: max |err|/max|coeff| %.1e; %d coefficient sets differ with the gradient", worst,
+                 bad);
+    shl_ctx_destroy(ctx);
+}
+
 SHL_TEST(sphere_float_random)
 {
     rng_t r = {14};

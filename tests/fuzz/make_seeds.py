@@ -212,6 +212,18 @@ def sphere_targets():
         "float-tangent": rel(30, 1, [0, 0, 0], 0, [3, 4, 0], 0, u8(20), exact345=True),
         "float-overflow-to-inf": sph(3, 1, [0, 0, 0], [1e300, 0, 0], 1.0),
         "null-grad": sph(3, 8, [0, 0, 0], [0, 0, 3], 1.0),
+        # the float entry points' set-up in double (src/sphere.c, geom_units_f): a difference
+        # beyond FLT_MAX, a denormal distance and radius, 2^110 offsets (gradient scaled),
+        # a few ulps outside, a denormal radius far away, non-finite and -0 arguments
+        "float-difference-beyond-flt-max": sph(5, 1, [-3e38, 0, 0], [3e38, 1e38, 0], 1e38),
+        "float-denormal-distance": sph(4, 1, [0, 0, 0], [2.0 ** -148, 2.0 ** -149, 0], 2.0 ** -149),
+        "float-offsets-2^110": sph(8, 1, [1, 2, 3], [2.0 ** 110, 2.0 ** 109, 3], 2.0 ** 108),
+        "float-tangent-ulps": rel(12, 1, [0, 0, 0], 0, [3, 4, 0], 0, u8(22), exact345=True),
+        "float-denormal-radius": sph(6, 1, [0, 0, 0], [0, 1, 0], 2.0 ** -149),
+        "float-x-nan": sph(2, 1, [NAN, 0, 0], [0, 0, 3], 1.0),
+        "float-centre-inf": sph(2, 1, [0, 0, 0], [0, -INF, 3], 1.0),
+        "float-radius-inf": sph(2, 1, [0, 0, 0], [0, 0, 3], INF),
+        "float-radius-minus-zero": sph(2, 1, [0, 0, 0], [0, 0, 3], -0.0),
     }
     for name, data in cases.items():
         write("fuzz_sphere", name, data)
