@@ -261,17 +261,21 @@ clean:
 	rm -rf $(BUILD)
 
 # ---- robustness: libFuzzer targets (tests/fuzz/) and the stress run (tests/stress/) ----
-# make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="fuzz_polygon ..."] [FUZZ_FLAGS=...]:
+# make fuzz [FUZZ_SECONDS=60 | FUZZ_RUNS=N [FUZZ_SEED=1]] [FUZZ_TARGETS="fuzz_polygon ..."] [FUZZ_FLAGS=...]:
 # builds every tests/fuzz/fuzz_*.c with clang and -fsanitize=fuzzer,address,undefined,
 # linked with the library objects built with the same sanitizers and the allocation
 # hooks (in $(BUILD)/fuzz), then runs each target for FUZZ_SECONDS seconds from its
-# committed seed corpus tests/fuzz/corpus/<target>/.  New inputs go to
+# committed seed corpus tests/fuzz/corpus/<target>/; with FUZZ_RUNS, N inputs per target
+# from the fixed seed FUZZ_SEED instead (deterministic: what CI runs).  New inputs go to
 # $(BUILD)/fuzz/corpus/<target>/, failing inputs to $(BUILD)/fuzz/artifacts/, the
 # full log to $(BUILD)/fuzz/<target>.log.  Every target runs even if an earlier one
 # fails; make fails if any did.
 FUZZ_SECONDS ?= 60
 FUZZ_CC      ?= clang
 FUZZ_FLAGS   ?=
+FUZZ_RUNS    ?=
+FUZZ_SEED    ?= 1
+FUZZ_LIMIT   := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED),-max_total_time=$(FUZZ_SECONDS))
 FUZZ_TARGETS ?= $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_DIR     := $(BUILD)/fuzz
 ifeq ($(SANITIZE),fuzzer)
@@ -282,8 +286,8 @@ endif
 fuzz: fuzz-build
 	@fail=""; for t in $(FUZZ_TARGETS); do \
 	  mkdir -p $(FUZZ_DIR)/corpus/$$t $(FUZZ_DIR)/artifacts; \
-	  echo "== $$t: $(FUZZ_SECONDS) s from tests/fuzz/corpus/$$t"; \
-	  $(FUZZ_DIR)/tests/fuzz/$$t -max_total_time=$(FUZZ_SECONDS) -timeout=60 -print_final_stats=1 \
+	  echo "== $$t: $(FUZZ_LIMIT) from tests/fuzz/corpus/$$t"; \
+	  $(FUZZ_DIR)/tests/fuzz/$$t $(FUZZ_LIMIT) -timeout=60 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_DIR)/artifacts/$$t- $(FUZZ_FLAGS) \
 	    $(FUZZ_DIR)/corpus/$$t tests/fuzz/corpus/$$t > $(FUZZ_DIR)/$$t.log 2>&1; rc=$$?; \
 	  grep -v -e '^#[0-9]*[[:space:]]*\(NEW\|REDUCE\|pulse\)' -e '^INFO: ' $(FUZZ_DIR)/$$t.log | tail -n 40; \
