@@ -57,17 +57,8 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
 {
     const int n = g->n, ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
-    double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
-    double l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
-    inv_l[lmax + 1] = 1.0 / (lmax + 1);
-    for (int l = 0; l <= lmax; ++l) {
-        l_m1[l] = l - 1;
-        twol_m1[l] = 2 * l - 1;
-        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
-        inv_l[l] = 1.0 / (l + (l == 0));
-        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Eq. 29 weights */
-        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
-    }
+    const shl__zh_band_consts *bc = shl__zh_bands(); /* the per-band constants, tabulated once */
+    const double *inv_l = bc->inv_l, *l_m1 = bc->l_m1, *twol_m1 = bc->twol_m1;
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
         double t[3][ZW];
         for (int k = 0; k < ZW; ++k)
@@ -130,11 +121,11 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         }
         surf[0] = zv_set1(g->solid_angle); /* S_0 */
         if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(s_b[l]) * bsum[l - 1] + zv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
+        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(bc->s_b[l]) * bsum[l - 1] + zv_set1(bc->s_s[l]) * surf[l - 2]; /* Eq. 29 */
         const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
         if (zh4) {
             for (int l = 0; l <= lmax; ++l) {
-                const zv kl = zv_set1(norm[l]), kg = zv_set1(norm[l] * gscale);
+                const zv kl = zv_set1(bc->norm[l]), kg = zv_set1(bc->norm[l] * gscale);
                 double t[4][ZW];
                 zv_scatter(kl * surf[l], t[0], 1, ZW); /* Eq. 13 */
                 for (int ax = 0; ax < 3; ++ax) zv_scatter(kg * gsum[ax][l], t[1 + ax], 1, ZW);
@@ -145,7 +136,7 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
             continue;
         }
         for (int l = 0; l <= lmax; ++l) {
-            const zv kl = zv_set1(norm[l]);
+            const zv kl = zv_set1(bc->norm[l]);
             const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
             if (!area) zv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
             for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
