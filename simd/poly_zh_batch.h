@@ -49,6 +49,79 @@ static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
     for (int k = 0; k < count; ++k) out[k * stride] = t[k];
 }
 
+/* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes side by side in each band step,
+ * as simd/poly_zh_coeff.h does for the coefficients: their recurrences are independent, so
+ * the G dependency chains overlap.  Every bsum[l] and gsum[ax][l] still adds the edges in
+ * order (Eq. 14; Wu Eq. 11, 29), so the bits equal one edge at a time. */
+__attribute__((always_inline)) static inline void zg_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
+                                                           zv ux, zv uy, zv uz, const shl__zh_band_consts *bc,
+                                                           zv *bsum, zv (*gsum)[SHL_LMAX_MAX + 1])
+{
+    enum { GMAX = 3 };
+    zv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX], v[GMAX], i0[GMAX], fp1[GMAX];
+    zv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
+    zv i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX], pl[GMAX], dpl[GMAX], dl[GMAX];
+    double m[3][GMAX]; /* mu_e, the weight of edge e's I_l in the gradient */
+#pragma GCC unroll 3
+    for (int k = 0; k < G; ++k) {
+        const int e = e0 + k, f = (e + 1 == g->n) ? 0 : e + 1;
+        const zv gamma = zv_set1(g->gamma[e]);
+        /* Eq. 20: coordinates of the lobe axes in the edge frame */
+        a[k] = zv_dot(ux, uy, uz, g->w[e]);
+        const zv b = zv_dot(ux, uy, uz, g->lam[e]);
+        c[k] = zv_dot(ux, uy, uz, g->mu[e]), af[k] = zv_dot(ux, uy, uz, g->w[f]);
+        c2[k] = c[k] * c[k]; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
+        s[k] = a[k] * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
+        b1[k] = a[k] * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
+        da[k] = zv_dot(ux, uy, uz, g->dw[e]);
+        p_lm1[k] = a[k], p_lm2[k] = zv_set1(1.0);    /* P_{l-1}(a_e), P_{l-2}(a_e) */
+        dp_lm1[k] = da[k], dp_lm2[k] = zv_set1(0.0); /* dP_{l-1}, dP_{l-2} */
+        b_lm1[k] = b1[k], b_lm2[k] = gamma;          /* B_1, B_0 (Eq. 26-27) */
+        d_lm1[k] = gamma, d_lm2[k] = zv_set1(0.0);   /* D_1, D_0 (Eq. 28) */
+        bsum[0] += c[k] * gamma;
+        if (lmax >= 2) bsum[1] += c[k] * b1[k];
+        i0[k] = zv_set1(g->f_integral[e]), fp1[k] = zv_set1(g->fprime1[e]);
+        v[k] = zv_dot(ux, uy, uz, g->gvec[e]);
+        /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+        i_lm1[k] = (v[k] * gamma - (fp1[k] * da[k] - i0[k] * a[k])) * zv_set1(0.5); /* I_1 */
+        j_lm1[k] = i0[k], j_lm2[k] = zv_set1(0.0);                                 /* J_1, J_0 = 0 */
+        for (int ax = 0; ax < 3; ++ax) m[ax][k] = g->mu[e][ax];
+    }
+    for (int ax = 0; ax < 3; ++ax) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+        for (int k = 0; k < G; ++k) {
+            gsum[ax][0] += zv_set1(m[ax][k]) * i0[k];
+            if (lmax >= 1) gsum[ax][1] += zv_set1(m[ax][k]) * i_lm1[k];
+        }
+    for (int l = 2; l <= lmax; ++l) {
+        const zv rl = zv_set1(bc->inv_l[l]), lm1 = zv_set1(bc->l_m1[l]), tlm1 = zv_set1(bc->twol_m1[l]);
+        const zv rl1 = zv_set1(bc->inv_l[l + 1]);
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            pl[k] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
+            dl[k] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+            /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
+            dpl[k] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
+            const zv il = (v[k] * dl[k] - j_lm1[k] - (fp1[k] * dpl[k] - i0[k] * pl[k])) * rl1;
+            const zv jl = tlm1 * i_lm1[k] + j_lm2[k];
+            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+        }
+        for (int ax = 0; ax < 3; ++ax)
+            for (int k = 0; k < G; ++k) gsum[ax][l] += zv_set1(m[ax][k]) * i_lm1[k];
+        if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            /* Eq. 31: C_{l-1} */
+            const zv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
+            const zv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
+            b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
+            bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
+            p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k];
+            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k];
+            d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k];
+        }
+    }
+}
+
 /* zh4 != NULL: instead of the blocks zh, zh_grad, the value and the 3 gradient
  * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
  * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
@@ -58,7 +131,6 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
     const int n = g->n, ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
     const shl__zh_band_consts *bc = shl__zh_bands(); /* the per-band constants, tabulated once */
-    const double *inv_l = bc->inv_l, *l_m1 = bc->l_m1, *twol_m1 = bc->twol_m1;
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
         double t[3][ZW];
         for (int k = 0; k < ZW; ++k)
@@ -67,56 +139,18 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
         memcpy(&ux, t[0], sizeof ux);
         memcpy(&uy, t[1], sizeof uy);
         memcpy(&uz, t[2], sizeof uz);
-        zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1], edge_i[SHL_LMAX_MAX + 1];
+        zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
         for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
         for (int a = 0; a < 3; ++a)
             for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
-        for (int e = 0; e < n; ++e) {
-            const int f = (e + 1 == n) ? 0 : e + 1;
-            const zv gamma = zv_set1(g->gamma[e]);
-            /* Eq. 20: coordinates of the lobe axes in the edge frame */
-            const zv a = zv_dot(ux, uy, uz, g->w[e]), b = zv_dot(ux, uy, uz, g->lam[e]);
-            const zv c = zv_dot(ux, uy, uz, g->mu[e]), af = zv_dot(ux, uy, uz, g->w[f]);
-            const zv c2 = c * c; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
-            const zv s = a * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
-            const zv b1 = a * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
-            const zv da = zv_dot(ux, uy, uz, g->dw[e]);
-            zv p_lm1 = a, p_lm2 = zv_set1(1.0);      /* P_{l-1}(a_e), P_{l-2}(a_e) */
-            zv dp_lm1 = da, dp_lm2 = zv_set1(0.0);   /* dP_{l-1}, dP_{l-2} */
-            zv b_lm1 = b1, b_lm2 = gamma;            /* B_1, B_0 (Eq. 26-27) */
-            zv d_lm1 = gamma, d_lm2 = zv_set1(0.0);  /* D_1, D_0 (Eq. 28) */
-            bsum[0] += c * gamma;
-            if (lmax >= 2) bsum[1] += c * b1;
-            const zv i0 = zv_set1(g->f_integral[e]), fp1 = zv_set1(g->fprime1[e]);
-            const zv v = zv_dot(ux, uy, uz, g->gvec[e]);
-            /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-            zv i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * zv_set1(0.5); /* I_1 */
-            zv j_lm1 = i0, j_lm2 = zv_set1(0.0);                        /* J_1, J_0 = 0 */
-            edge_i[0] = i0;
-            if (lmax >= 1) edge_i[1] = i_lm1;
-            for (int l = 2; l <= lmax; ++l) {
-                const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
-                const zv pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl; /* Eq. 11 */
-                const zv dl = tlm1 * b_lm1 + d_lm2;                  /* Eq. 32 */
-                /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-                const zv dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
-                const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
-                const zv jl = tlm1 * i_lm1 + j_lm2;
-                j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-                edge_i[l] = il;
-                if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
-                /* Eq. 31: C_{l-1} */
-                const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
-                const zv bl = (tlm1 * cl - lm1 * b_lm2) * rl; /* Eq. 30 */
-                b_lm2 = b_lm1, b_lm1 = bl;
-                bsum[l] += c * bl; /* Eq. 14 */
-                p_lm2 = p_lm1, p_lm1 = pl;
-                dp_lm2 = dp_lm1, dp_lm1 = dpl;
-                d_lm2 = d_lm1, d_lm1 = dl;
-            }
-            for (int ax = 0; ax < 3; ++ax) { /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
-                const zv m = zv_set1(g->mu[e][ax]);
-                for (int l = 0; l <= lmax; ++l) gsum[ax][l] += m * edge_i[l];
+        for (int e0 = 0; e0 < n;) { /* n >= 3: groups of 3, of 2 where 2 or 4 are left */
+            const int rest = n - e0;
+            if (rest == 2 || rest == 4) {
+                zg_edges(g, e0, 2, lmax, ux, uy, uz, bc, bsum, gsum);
+                e0 += 2;
+            } else {
+                zg_edges(g, e0, 3, lmax, ux, uy, uz, bc, bsum, gsum);
+                e0 += 3;
             }
         }
         surf[0] = zv_set1(g->solid_angle); /* S_0 */
