@@ -25,157 +25,40 @@
 #else
 #define ZW 2
 #endif
-typedef double zv __attribute__((vector_size(ZW * sizeof(double))));
+/* Every lobe of zh_lanes' outputs (gv_block of simd/poly_zh_grad.h): blocks of ZW lobes, a
+ * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors (as shl__poly_zh below). */
+#define GV_BLOCK2(w) gv_block_##w
+#define GV_BLOCK(w) GV_BLOCK2(w)
+#define GW ZW
+#include "poly_zh_grad.h"
+#undef GW
+#if ZW > 2
+#define GW 2
+#include "poly_zh_grad.h"
+#undef GW
+#endif
+#if ZW > 4
+#define GW 4
+#include "poly_zh_grad.h"
+#undef GW
+#endif
 
-static inline zv zv_set1(double x)
-{
-    double t[ZW];
-    for (int k = 0; k < ZW; ++k) t[k] = x;
-    zv v;
-    memcpy(&v, t, sizeof v);
-    return v;
-}
-
-/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of polygon_zh.h */
-static inline zv zv_dot(zv ux, zv uy, zv uz, const double p[3])
-{
-    return ux * zv_set1(p[0]) + uy * zv_set1(p[1]) + uz * zv_set1(p[2]);
-}
-
-static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
-{
-    double t[ZW];
-    memcpy(t, &v, sizeof t);
-    for (int k = 0; k < count; ++k) out[k * stride] = t[k];
-}
-
-/* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes side by side in each band step,
- * as simd/poly_zh_coeff.h does for the coefficients: their recurrences are independent, so
- * the G dependency chains overlap.  Every bsum[l] and gsum[ax][l] still adds the edges in
- * order (Eq. 14; Wu Eq. 11, 29), so the bits equal one edge at a time. */
-__attribute__((always_inline)) static inline void zg_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
-                                                           zv ux, zv uy, zv uz, const shl__zh_band_consts *bc,
-                                                           zv *bsum, zv (*gsum)[SHL_LMAX_MAX + 1])
-{
-    enum { GMAX = 3 };
-    zv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX], v[GMAX], i0[GMAX], fp1[GMAX];
-    zv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
-    zv i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX], pl[GMAX], dpl[GMAX], dl[GMAX];
-    double m[3][GMAX]; /* mu_e, the weight of edge e's I_l in the gradient */
-#pragma GCC unroll 3
-    for (int k = 0; k < G; ++k) {
-        const int e = e0 + k, f = (e + 1 == g->n) ? 0 : e + 1;
-        const zv gamma = zv_set1(g->gamma[e]);
-        /* Eq. 20: coordinates of the lobe axes in the edge frame */
-        a[k] = zv_dot(ux, uy, uz, g->w[e]);
-        const zv b = zv_dot(ux, uy, uz, g->lam[e]);
-        c[k] = zv_dot(ux, uy, uz, g->mu[e]), af[k] = zv_dot(ux, uy, uz, g->w[f]);
-        c2[k] = c[k] * c[k]; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
-        s[k] = a[k] * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
-        b1[k] = a[k] * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
-        da[k] = zv_dot(ux, uy, uz, g->dw[e]);
-        p_lm1[k] = a[k], p_lm2[k] = zv_set1(1.0);    /* P_{l-1}(a_e), P_{l-2}(a_e) */
-        dp_lm1[k] = da[k], dp_lm2[k] = zv_set1(0.0); /* dP_{l-1}, dP_{l-2} */
-        b_lm1[k] = b1[k], b_lm2[k] = gamma;          /* B_1, B_0 (Eq. 26-27) */
-        d_lm1[k] = gamma, d_lm2[k] = zv_set1(0.0);   /* D_1, D_0 (Eq. 28) */
-        bsum[0] += c[k] * gamma;
-        if (lmax >= 2) bsum[1] += c[k] * b1[k];
-        i0[k] = zv_set1(g->f_integral[e]), fp1[k] = zv_set1(g->fprime1[e]);
-        v[k] = zv_dot(ux, uy, uz, g->gvec[e]);
-        /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-        i_lm1[k] = (v[k] * gamma - (fp1[k] * da[k] - i0[k] * a[k])) * zv_set1(0.5); /* I_1 */
-        j_lm1[k] = i0[k], j_lm2[k] = zv_set1(0.0);                                 /* J_1, J_0 = 0 */
-        for (int ax = 0; ax < 3; ++ax) m[ax][k] = g->mu[e][ax];
-    }
-    for (int ax = 0; ax < 3; ++ax) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
-        for (int k = 0; k < G; ++k) {
-            gsum[ax][0] += zv_set1(m[ax][k]) * i0[k];
-            if (lmax >= 1) gsum[ax][1] += zv_set1(m[ax][k]) * i_lm1[k];
-        }
-    for (int l = 2; l <= lmax; ++l) {
-        const zv rl = zv_set1(bc->inv_l[l]), lm1 = zv_set1(bc->l_m1[l]), tlm1 = zv_set1(bc->twol_m1[l]);
-        const zv rl1 = zv_set1(bc->inv_l[l + 1]);
-#pragma GCC unroll 3
-        for (int k = 0; k < G; ++k) {
-            pl[k] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-            dl[k] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
-            /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-            dpl[k] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
-            const zv il = (v[k] * dl[k] - j_lm1[k] - (fp1[k] * dpl[k] - i0[k] * pl[k])) * rl1;
-            const zv jl = tlm1 * i_lm1[k] + j_lm2[k];
-            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
-        }
-        for (int ax = 0; ax < 3; ++ax)
-            for (int k = 0; k < G; ++k) gsum[ax][l] += zv_set1(m[ax][k]) * i_lm1[k];
-        if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
-#pragma GCC unroll 3
-        for (int k = 0; k < G; ++k) {
-            /* Eq. 31: C_{l-1} */
-            const zv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
-            const zv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
-            b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
-            bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
-            p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k];
-            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k];
-            d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k];
-        }
-    }
-}
-
-/* zh4 != NULL: instead of the blocks zh, zh_grad, the value and the 3 gradient
- * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
- * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
                                                            double *zh_grad, double *zh4, double gscale)
 {
-    const int n = g->n, ndir = 2 * lmax + 1;
+    const int ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
     const shl__zh_band_consts *bc = shl__zh_bands(); /* the per-band constants, tabulated once */
-    for (int d0 = 0; d0 < ndir; d0 += ZW) {
-        double t[3][ZW];
-        for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1][c];
-        zv ux, uy, uz;
-        memcpy(&ux, t[0], sizeof ux);
-        memcpy(&uy, t[1], sizeof uy);
-        memcpy(&uz, t[2], sizeof uz);
-        zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
-        for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
-        for (int a = 0; a < 3; ++a)
-            for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
-        for (int e0 = 0; e0 < n;) { /* n >= 3: groups of 3, of 2 where 2 or 4 are left */
-            const int rest = n - e0;
-            if (rest == 2 || rest == 4) {
-                zg_edges(g, e0, 2, lmax, ux, uy, uz, bc, bsum, gsum);
-                e0 += 2;
-            } else {
-                zg_edges(g, e0, 3, lmax, ux, uy, uz, bc, bsum, gsum);
-                e0 += 3;
-            }
-        }
-        surf[0] = zv_set1(g->solid_angle); /* S_0 */
-        if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(bc->s_b[l]) * bsum[l - 1] + zv_set1(bc->s_s[l]) * surf[l - 2]; /* Eq. 29 */
-        const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
-        if (zh4) {
-            for (int l = 0; l <= lmax; ++l) {
-                const zv kl = zv_set1(bc->norm[l]), kg = zv_set1(bc->norm[l] * gscale);
-                double t[4][ZW];
-                zv_scatter(kl * surf[l], t[0], 1, ZW); /* Eq. 13 */
-                for (int ax = 0; ax < 3; ++ax) zv_scatter(kg * gsum[ax][l], t[1 + ax], 1, ZW);
-                double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
-                for (int k = 0; k < cnt; ++k)
-                    for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
-            }
-            continue;
-        }
-        for (int l = 0; l <= lmax; ++l) {
-            const zv kl = zv_set1(bc->norm[l]);
-            const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
-            if (!area) zv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
-            for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
-        }
-    }
+    const int full = ndir - ndir % ZW, rest = ndir - full;
+#if ZW > 2
+    if (rest > 0 && rest <= 2) GV_BLOCK(2)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+#if ZW > 4
+    else if (rest > 0 && rest <= 4) GV_BLOCK(4)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+#endif
+    else
+#endif
+    if (rest > 0) GV_BLOCK(ZW)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+    for (int d0 = 0; d0 < full; d0 += ZW) GV_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh, zh_grad, zh4, gscale, area);
     if (area && zh4) { /* coefficients as the non-gradient kernel */
         double za[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, za);
