@@ -25,132 +25,40 @@
 #else
 #define ZW 2
 #endif
-typedef double zv __attribute__((vector_size(ZW * sizeof(double))));
+/* Every lobe of zh_lanes' outputs (gv_block of simd/poly_zh_grad.h): blocks of ZW lobes, a
+ * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors (as shl__poly_zh below). */
+#define GV_BLOCK2(w) gv_block_##w
+#define GV_BLOCK(w) GV_BLOCK2(w)
+#define GW ZW
+#include "poly_zh_grad.h"
+#undef GW
+#if ZW > 2
+#define GW 2
+#include "poly_zh_grad.h"
+#undef GW
+#endif
+#if ZW > 4
+#define GW 4
+#include "poly_zh_grad.h"
+#undef GW
+#endif
 
-static inline zv zv_set1(double x)
-{
-    double t[ZW];
-    for (int k = 0; k < ZW; ++k) t[k] = x;
-    zv v;
-    memcpy(&v, t, sizeof v);
-    return v;
-}
-
-/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of polygon_zh.h */
-static inline zv zv_dot(zv ux, zv uy, zv uz, const double p[3])
-{
-    return ux * zv_set1(p[0]) + uy * zv_set1(p[1]) + uz * zv_set1(p[2]);
-}
-
-static inline void zv_scatter(zv v, double *out, ptrdiff_t stride, int count)
-{
-    double t[ZW];
-    memcpy(t, &v, sizeof t);
-    for (int k = 0; k < count; ++k) out[k * stride] = t[k];
-}
-
-/* zh4 != NULL: instead of the blocks zh, zh_grad, the value and the 3 gradient
- * components of lobe d, band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh below),
- * the gradient's band weights K_l times gscale (a power of two, 1 for scaled units). */
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
                                                            double *zh_grad, double *zh4, double gscale)
 {
-    const int n = g->n, ndir = 2 * lmax + 1;
+    const int ndir = 2 * lmax + 1;
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
-    double norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
-    double l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
-    inv_l[lmax + 1] = 1.0 / (lmax + 1);
-    for (int l = 0; l <= lmax; ++l) {
-        l_m1[l] = l - 1;
-        twol_m1[l] = 2 * l - 1;
-        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
-        inv_l[l] = 1.0 / (l + (l == 0));
-        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Eq. 29 weights */
-        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
-    }
-    for (int d0 = 0; d0 < ndir; d0 += ZW) {
-        double t[3][ZW];
-        for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + k < ndir ? d0 + k : ndir - 1][c];
-        zv ux, uy, uz;
-        memcpy(&ux, t[0], sizeof ux);
-        memcpy(&uy, t[1], sizeof uy);
-        memcpy(&uz, t[2], sizeof uz);
-        zv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1], edge_i[SHL_LMAX_MAX + 1];
-        for (int l = 0; l <= lmax; ++l) bsum[l] = zv_set1(0.0);
-        for (int a = 0; a < 3; ++a)
-            for (int l = 0; l <= lmax; ++l) gsum[a][l] = zv_set1(0.0);
-        for (int e = 0; e < n; ++e) {
-            const int f = (e + 1 == n) ? 0 : e + 1;
-            const zv gamma = zv_set1(g->gamma[e]);
-            /* Eq. 20: coordinates of the lobe axes in the edge frame */
-            const zv a = zv_dot(ux, uy, uz, g->w[e]), b = zv_dot(ux, uy, uz, g->lam[e]);
-            const zv c = zv_dot(ux, uy, uz, g->mu[e]), af = zv_dot(ux, uy, uz, g->w[f]);
-            const zv c2 = c * c; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
-            const zv s = a * zv_set1(g->sin_gamma[e]) - b * zv_set1(g->cos_gamma[e]);
-            const zv b1 = a * zv_set1(g->sin_gamma[e]) + b * zv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
-            const zv da = zv_dot(ux, uy, uz, g->dw[e]);
-            zv p_lm1 = a, p_lm2 = zv_set1(1.0);      /* P_{l-1}(a_e), P_{l-2}(a_e) */
-            zv dp_lm1 = da, dp_lm2 = zv_set1(0.0);   /* dP_{l-1}, dP_{l-2} */
-            zv b_lm1 = b1, b_lm2 = gamma;            /* B_1, B_0 (Eq. 26-27) */
-            zv d_lm1 = gamma, d_lm2 = zv_set1(0.0);  /* D_1, D_0 (Eq. 28) */
-            bsum[0] += c * gamma;
-            if (lmax >= 2) bsum[1] += c * b1;
-            const zv i0 = zv_set1(g->f_integral[e]), fp1 = zv_set1(g->fprime1[e]);
-            const zv v = zv_dot(ux, uy, uz, g->gvec[e]);
-            /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-            zv i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * zv_set1(0.5); /* I_1 */
-            zv j_lm1 = i0, j_lm2 = zv_set1(0.0);                        /* J_1, J_0 = 0 */
-            edge_i[0] = i0;
-            if (lmax >= 1) edge_i[1] = i_lm1;
-            for (int l = 2; l <= lmax; ++l) {
-                const zv rl = zv_set1(inv_l[l]), lm1 = zv_set1(l_m1[l]), tlm1 = zv_set1(twol_m1[l]);
-                const zv pl = (tlm1 * a * p_lm1 - lm1 * p_lm2) * rl; /* Eq. 11 */
-                const zv dl = tlm1 * b_lm1 + d_lm2;                  /* Eq. 32 */
-                /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-                const zv dpl = (tlm1 * (af * dp_lm1 + da * p_lm1) - lm1 * dp_lm2) * rl;
-                const zv il = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * zv_set1(inv_l[l + 1]);
-                const zv jl = tlm1 * i_lm1 + j_lm2;
-                j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-                edge_i[l] = il;
-                if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
-                /* Eq. 31: C_{l-1} */
-                const zv cl = (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1 + lm1 * b_lm2) * rl;
-                const zv bl = (tlm1 * cl - lm1 * b_lm2) * rl; /* Eq. 30 */
-                b_lm2 = b_lm1, b_lm1 = bl;
-                bsum[l] += c * bl; /* Eq. 14 */
-                p_lm2 = p_lm1, p_lm1 = pl;
-                dp_lm2 = dp_lm1, dp_lm1 = dpl;
-                d_lm2 = d_lm1, d_lm1 = dl;
-            }
-            for (int ax = 0; ax < 3; ++ax) { /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
-                const zv m = zv_set1(g->mu[e][ax]);
-                for (int l = 0; l <= lmax; ++l) gsum[ax][l] += m * edge_i[l];
-            }
-        }
-        surf[0] = zv_set1(g->solid_angle); /* S_0 */
-        if (lmax >= 1) surf[1] = bsum[0] * zv_set1(0.5); /* S_1, Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = zv_set1(s_b[l]) * bsum[l - 1] + zv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
-        const int cnt = ndir - d0 < ZW ? ndir - d0 : ZW;
-        if (zh4) {
-            for (int l = 0; l <= lmax; ++l) {
-                const zv kl = zv_set1(norm[l]), kg = zv_set1(norm[l] * gscale);
-                double t[4][ZW];
-                zv_scatter(kl * surf[l], t[0], 1, ZW); /* Eq. 13 */
-                for (int ax = 0; ax < 3; ++ax) zv_scatter(kg * gsum[ax][l], t[1 + ax], 1, ZW);
-                double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
-                for (int k = 0; k < cnt; ++k)
-                    for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
-            }
-            continue;
-        }
-        for (int l = 0; l <= lmax; ++l) {
-            const zv kl = zv_set1(norm[l]);
-            const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
-            if (!area) zv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
-            for (int ax = 0; ax < 3; ++ax) zv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
-        }
-    }
+    const shl__zh_band_consts *bc = shl__zh_bands(); /* the per-band constants, tabulated once */
+    const int full = ndir - ndir % ZW, rest = ndir - full;
+#if ZW > 2
+    if (rest > 0 && rest <= 2) GV_BLOCK(2)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+#if ZW > 4
+    else if (rest > 0 && rest <= 4) GV_BLOCK(4)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+#endif
+    else
+#endif
+    if (rest > 0) GV_BLOCK(ZW)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+    for (int d0 = 0; d0 < full; d0 += ZW) GV_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh, zh_grad, zh4, gscale, area);
     if (area && zh4) { /* coefficients as the non-gradient kernel */
         double za[SHL__ZH_BLOCK];
         shl__poly_zh_area(g, lmax, za);

@@ -546,6 +546,7 @@ static void make_zh_bands(void)
         zh_bands.s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));
         zh_bands.s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
     }
+    zh_bands.inv_l[SHL_LMAX_MAX + 1] = 1.0 / (SHL_LMAX_MAX + 1); /* zh_lanes' I_{lmax} step */
 }
 
 const shl__zh_band_consts *shl__zh_bands(void)

@@ -34,11 +34,11 @@ typedef struct shl__poly_geom {
 
 /* Build the geometry; the caller has validated n and finiteness. */
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n);
-/* Per-band constants of the double ZH recurrence, l <= SHL_LMAX_MAX (the expressions of
- * simd/poly_zh_batch.h's zh_lanes, so equal bit for bit), computed once (pthread_once). */
+/* Per-band constants of the double ZH recurrence, l <= SHL_LMAX_MAX, computed once
+ * (pthread_once) and read by both double kernels (simd/poly_zh_coeff.h, simd/poly_zh_grad.h). */
 typedef struct {
     double norm[SHL_LMAX_MAX + 1];    /* K_l = sqrt((2l+1) / 4 pi) */
-    double inv_l[SHL_LMAX_MAX + 1];   /* 1 / l (1 at l = 0) */
+    double inv_l[SHL_LMAX_MAX + 2];   /* 1 / l (1 at l = 0), l <= SHL_LMAX_MAX + 1 */
     double l_m1[SHL_LMAX_MAX + 1];    /* l - 1 */
     double twol_m1[SHL_LMAX_MAX + 1]; /* 2l - 1 */
     double s_b[SHL_LMAX_MAX + 1];     /* Eq. 29 weights (2l-1) / (l(l+1)) */

@@ -1,0 +1,173 @@
+/* ZH integrals and their gradients (shl_polygon_grad, and the scalar ISA's
+ * shl__poly_zh_grad) for one block of GW lobes side by side, GW doubles per vector;
+ * included by simd/poly_zh_batch.h once per width it uses (its full width ZW, and 2 and 4
+ * below that for a partial last block of lobes, as poly_zh_coeff.h), with GW defined.
+ * Each lane does exactly the one-lobe arithmetic of src/polygon_zh.h (elementwise
+ * operations, no contraction), so the width changes no bit. */
+#define GV_CAT2(a, b) a##b
+#define GV_CAT(a, b) GV_CAT2(a, b)
+#define gv GV_CAT(gv, GW)
+#define gv_set1 GV_CAT(gv_set1_, GW)
+#define gv_dot GV_CAT(gv_dot_, GW)
+#define gv_scatter GV_CAT(gv_scatter_, GW)
+#define gv_edges GV_CAT(gv_edges_, GW)
+#define gv_block GV_CAT(gv_block_, GW)
+
+typedef double gv __attribute__((vector_size(GW * sizeof(double))));
+
+static inline gv gv_set1(double x)
+{
+    double t[GW];
+    for (int k = 0; k < GW; ++k) t[k] = x;
+    gv v;
+    memcpy(&v, t, sizeof v);
+    return v;
+}
+
+/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of polygon_zh.h */
+static inline gv gv_dot(gv ux, gv uy, gv uz, const double p[3])
+{
+    return ux * gv_set1(p[0]) + uy * gv_set1(p[1]) + uz * gv_set1(p[2]);
+}
+
+static inline void gv_scatter(gv v, double *out, ptrdiff_t stride, int count)
+{
+    double t[GW];
+    memcpy(t, &v, sizeof t);
+    for (int k = 0; k < count; ++k) out[k * stride] = t[k];
+}
+
+/* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes side by side in each band step,
+ * as simd/poly_zh_coeff.h does for the coefficients: their recurrences are independent, so
+ * the G dependency chains overlap.  Every bsum[l] and gsum[ax][l] still adds the edges in
+ * order (Eq. 14; Wu Eq. 11, 29), so the bits equal one edge at a time. */
+__attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
+                                                           gv ux, gv uy, gv uz, const shl__zh_band_consts *bc,
+                                                           gv *bsum, gv (*gsum)[SHL_LMAX_MAX + 1])
+{
+    enum { GMAX = 3 };
+    gv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX], v[GMAX], i0[GMAX], fp1[GMAX];
+    gv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
+    gv i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX], pl[GMAX], dpl[GMAX], dl[GMAX];
+    double m[3][GMAX]; /* mu_e, the weight of edge e's I_l in the gradient */
+#pragma GCC unroll 3
+    for (int k = 0; k < G; ++k) {
+        const int e = e0 + k, f = (e + 1 == g->n) ? 0 : e + 1;
+        const gv gamma = gv_set1(g->gamma[e]);
+        /* Eq. 20: coordinates of the lobe axes in the edge frame */
+        a[k] = gv_dot(ux, uy, uz, g->w[e]);
+        const gv b = gv_dot(ux, uy, uz, g->lam[e]);
+        c[k] = gv_dot(ux, uy, uz, g->mu[e]), af[k] = gv_dot(ux, uy, uz, g->w[f]);
+        c2[k] = c[k] * c[k]; /* = 1 - a^2 - b^2 of Eq. 31, without cancellation */
+        s[k] = a[k] * gv_set1(g->sin_gamma[e]) - b * gv_set1(g->cos_gamma[e]);
+        b1[k] = a[k] * gv_set1(g->sin_gamma[e]) + b * gv_set1(g->omc_gamma[e]); /* B_1, Eq. 27 */
+        da[k] = gv_dot(ux, uy, uz, g->dw[e]);
+        p_lm1[k] = a[k], p_lm2[k] = gv_set1(1.0);    /* P_{l-1}(a_e), P_{l-2}(a_e) */
+        dp_lm1[k] = da[k], dp_lm2[k] = gv_set1(0.0); /* dP_{l-1}, dP_{l-2} */
+        b_lm1[k] = b1[k], b_lm2[k] = gamma;          /* B_1, B_0 (Eq. 26-27) */
+        d_lm1[k] = gamma, d_lm2[k] = gv_set1(0.0);   /* D_1, D_0 (Eq. 28) */
+        bsum[0] += c[k] * gamma;
+        if (lmax >= 2) bsum[1] += c[k] * b1[k];
+        i0[k] = gv_set1(g->f_integral[e]), fp1[k] = gv_set1(g->fprime1[e]);
+        v[k] = gv_dot(ux, uy, uz, g->gvec[e]);
+        /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+        i_lm1[k] = (v[k] * gamma - (fp1[k] * da[k] - i0[k] * a[k])) * gv_set1(0.5); /* I_1 */
+        j_lm1[k] = i0[k], j_lm2[k] = gv_set1(0.0);                                 /* J_1, J_0 = 0 */
+        for (int ax = 0; ax < 3; ++ax) m[ax][k] = g->mu[e][ax];
+    }
+    for (int ax = 0; ax < 3; ++ax) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+        for (int k = 0; k < G; ++k) {
+            gsum[ax][0] += gv_set1(m[ax][k]) * i0[k];
+            if (lmax >= 1) gsum[ax][1] += gv_set1(m[ax][k]) * i_lm1[k];
+        }
+    for (int l = 2; l <= lmax; ++l) {
+        const gv rl = gv_set1(bc->inv_l[l]), lm1 = gv_set1(bc->l_m1[l]), tlm1 = gv_set1(bc->twol_m1[l]);
+        const gv rl1 = gv_set1(bc->inv_l[l + 1]);
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            pl[k] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
+            dl[k] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+            /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
+            dpl[k] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
+            const gv il = (v[k] * dl[k] - j_lm1[k] - (fp1[k] * dpl[k] - i0[k] * pl[k])) * rl1;
+            const gv jl = tlm1 * i_lm1[k] + j_lm2[k];
+            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+        }
+        for (int ax = 0; ax < 3; ++ax)
+            for (int k = 0; k < G; ++k) gsum[ax][l] += gv_set1(m[ax][k]) * i_lm1[k];
+        if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            /* Eq. 31: C_{l-1} */
+            const gv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
+            const gv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
+            b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
+            bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
+            p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k];
+            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k];
+            d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k];
+        }
+    }
+}
+
+/* Lobes d0 .. d0 + cnt - 1 (cnt <= GW; spare lanes repeat the last lobe).  zh4 != NULL:
+ * instead of the blocks zh, zh_grad, the value and the 3 gradient components of lobe d,
+ * band l side by side at zh4[4 (l (2 lmax + 1) + d) + 0..3] (grad_sh), the gradient's band
+ * weights K_l times gscale (a power of two, 1 for scaled units).  area: zh is left to
+ * the caller (the planar rule). */
+static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const shl__zh_band_consts *bc, double *zh,
+                     double *zh_grad, double *zh4, double gscale, int area)
+{
+    const int n = g->n, ndir = 2 * lmax + 1;
+    double t[3][GW];
+    for (int k = 0; k < GW; ++k)
+        for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)][c];
+    gv ux, uy, uz;
+    memcpy(&ux, t[0], sizeof ux);
+    memcpy(&uy, t[1], sizeof uy);
+    memcpy(&uz, t[2], sizeof uz);
+    gv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
+    for (int l = 0; l <= lmax; ++l) bsum[l] = gv_set1(0.0);
+    for (int a = 0; a < 3; ++a)
+        for (int l = 0; l <= lmax; ++l) gsum[a][l] = gv_set1(0.0);
+    for (int e0 = 0; e0 < n;) { /* n >= 3: groups of 3, of 2 where 2 or 4 are left */
+        const int rest = n - e0;
+        if (rest == 2 || rest == 4) {
+            gv_edges(g, e0, 2, lmax, ux, uy, uz, bc, bsum, gsum);
+            e0 += 2;
+        } else {
+            gv_edges(g, e0, 3, lmax, ux, uy, uz, bc, bsum, gsum);
+            e0 += 3;
+        }
+    }
+    surf[0] = gv_set1(g->solid_angle); /* S_0 */
+    if (lmax >= 1) surf[1] = bsum[0] * gv_set1(0.5); /* S_1, Eq. 25 */
+    for (int l = 2; l <= lmax; ++l) surf[l] = gv_set1(bc->s_b[l]) * bsum[l - 1] + gv_set1(bc->s_s[l]) * surf[l - 2]; /* Eq. 29 */
+    if (zh4) {
+        for (int l = 0; l <= lmax; ++l) {
+            const gv kl = gv_set1(bc->norm[l]), kg = gv_set1(bc->norm[l] * gscale);
+            double t[4][GW];
+            gv_scatter(kl * surf[l], t[0], 1, GW); /* Eq. 13 */
+            for (int ax = 0; ax < 3; ++ax) gv_scatter(kg * gsum[ax][l], t[1 + ax], 1, GW);
+            double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
+            for (int k = 0; k < cnt; ++k)
+                for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
+        }
+        return;
+    }
+    for (int l = 0; l <= lmax; ++l) {
+        const gv kl = gv_set1(bc->norm[l]);
+        const ptrdiff_t at = (ptrdiff_t)d0 * SHL__ZH_STRIDE + l;
+        if (!area) gv_scatter(kl * surf[l], zh + at, SHL__ZH_STRIDE, cnt); /* Eq. 13 */
+        for (int ax = 0; ax < 3; ++ax) gv_scatter(kl * gsum[ax][l], zh_grad + ax * SHL__ZH_BLOCK + at, SHL__ZH_STRIDE, cnt);
+    }
+}
+
+#undef gv_block
+#undef gv_edges
+#undef gv_scatter
+#undef gv_dot
+#undef gv_set1
+#undef gv
+#undef GV_CAT
+#undef GV_CAT2
