@@ -7,7 +7,10 @@
  * the reference's one-lobe arithmetic, so every ISA gives the reference's bits
  * (tests/test_hessian.c, hess_isa_kernels_match_reference).  The contraction
  * of (H2) is done inside the band loop instead of after it (the same sums, edges in
- * the same order).  A partial last block repeats its last lobe.  The ZH -> SH
+ * the same order).  A partial last block repeats its last lobe, at full width: run on 2- or
+ * 4-lane vectors (as poly_zh_batch.h's coefficient blocks) or with two edges side by side,
+ * this kernel measured slower on AVX-512 (AMD EPYC, 2026-12-02): a block costs its
+ * instructions and spills per edge and band, about the same at any width.  The ZH -> SH
  * reconstruction (Wang 2018 Eq. 33) of the ten blocks (shl__zh_to_sh_multi) follows in
  * the same call, vectorized across orders m, and the sphere's six-block one
  * (shl__zh_to_sh_hess6) across blocks: the same sums in the same order as shl__zh_to_sh. */
