@@ -7,7 +7,10 @@
  * the reference's one-lobe arithmetic, so every ISA gives the reference's bits
  * (tests/test_hessian.c, hess_isa_kernels_match_reference).  The contraction
  * of (H2) is done inside the band loop instead of after it (the same sums, edges in
- * the same order).  A partial last block repeats its last lobe.  The ZH -> SH
+ * the same order).  A partial last block repeats its last lobe, at full width: run on 2- or
+ * 4-lane vectors (as poly_zh_batch.h's coefficient blocks) or with two edges side by side,
+ * this kernel measured slower on AVX-512 (AMD EPYC, 2026-12-02): a block costs its
+ * instructions and spills per edge and band, about the same at any width.  The ZH -> SH
  * reconstruction (Wang 2018 Eq. 33) of the ten blocks (shl__zh_to_sh_multi) follows in
  * the same call, vectorized across orders m, and the sphere's six-block one
  * (shl__zh_to_sh_hess6) across blocks: the same sums in the same order as shl__zh_to_sh. */
@@ -119,16 +122,16 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1) + ZW];
     for (int k = 0; k < ZW; ++k) z[SHL__ZH_MULTI * (lmax + 1) * dp + k] = 0.0; /* read past the last row (zh_to_sh_rows) */
     const double sc = g->grad_scale[0] * g->grad_scale[1];
-    double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
-        s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
-    for (int l = 0; l <= lmax; ++l) { /* as the reference */
-        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
+    /* band constants tabulated once (shl__zh_bands: the reference's expressions, so its bits) */
+    const shl__zh_band_consts *bc = shl__zh_bands();
+    const double *norm = bc->norm, *s_b = bc->s_b, *s_s = bc->s_s;
+    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
+    for (int l = 0; l <= lmax; ++l) {
         gnorm[l] = unscaled ? norm[l] * sc : norm[l];
         hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
-        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));
-        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
+        inv_l[l] = bc->inv_l[l];
     }
-    for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
+    inv_l[lmax + 1] = 1.0 / (lmax + 1), inv_l[lmax + 2] = 1.0 / (lmax + 2); /* past the table at SHL_LMAX_MAX */
     shl__hess_edge he[SHL_MAX_VERTS];
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
