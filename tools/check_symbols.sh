@@ -17,7 +17,7 @@ cd "$(dirname "$0")/.."
 build=${1:-build}
 
 # The internal headers bench/ and tests/ may include (only in programs linked statically).
-allowed=(src/internal.h src/zh_tables.h src/sh_basis.h src/sphere.h src/sh_rotate.h src/quad.h src/brdf.h src/polygon.h src/parallel.h src/grid.h simd/kernel_api.h simd/isa_list.h)
+allowed=(src/internal.h src/zh_tables.h src/sh_basis.h src/sphere.h src/sh_rotate.h src/quad.h src/brdf.h src/polygon.h src/parallel.h src/grid.h src/agrid.h simd/kernel_api.h simd/isa_list.h)
 
 fail=0
 err() { echo "check_symbols: $*" >&2; fail=1; }
