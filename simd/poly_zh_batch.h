@@ -15,6 +15,7 @@
 #include "../src/polygon.h"
 #include "kernel_api.h"
 #include <string.h>
+#include "dvec.h"
 
 #ifdef __clang__
 #pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */

@@ -10,28 +10,11 @@
  * edge's last band.  Every bsum[l] still adds the edges in order (Eq. 14). */
 #define CW_CAT2(a, b) a##b
 #define CW_CAT(a, b) CW_CAT2(a, b)
-#define cv CW_CAT(cv, CW)
-#define cv_set1 CW_CAT(cv_set1_, CW)
-#define cv_dot CW_CAT(cv_dot_, CW)
+#define cv CW_CAT(dv, CW) /* simd/dvec.h */
+#define cv_set1 CW_CAT(cv, _set1)
+#define cv_dot CW_CAT(cv, _dot)
 #define cv_edges CW_CAT(cv_edges_, CW)
 #define cv_block CW_CAT(cv_block_, CW)
-
-typedef double cv __attribute__((vector_size(CW * sizeof(double))));
-
-static inline cv cv_set1(double x)
-{
-    double t[CW];
-    for (int k = 0; k < CW; ++k) t[k] = x;
-    cv v;
-    memcpy(&v, t, sizeof v);
-    return v;
-}
-
-/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of zh_lanes */
-static inline cv cv_dot(cv ux, cv uy, cv uz, const double p[3])
-{
-    return ux * cv_set1(p[0]) + uy * cv_set1(p[1]) + uz * cv_set1(p[2]);
-}
 
 __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
                                                            cv ux, cv uy, cv uz, const shl__zh_band_consts *bc,

@@ -6,36 +6,12 @@
  * operations, no contraction), so the width changes no bit. */
 #define GV_CAT2(a, b) a##b
 #define GV_CAT(a, b) GV_CAT2(a, b)
-#define gv GV_CAT(gv, GW)
-#define gv_set1 GV_CAT(gv_set1_, GW)
-#define gv_dot GV_CAT(gv_dot_, GW)
-#define gv_scatter GV_CAT(gv_scatter_, GW)
+#define gv GV_CAT(dv, GW) /* simd/dvec.h */
+#define gv_set1 GV_CAT(gv, _set1)
+#define gv_dot GV_CAT(gv, _dot)
+#define gv_scatter GV_CAT(gv, _scatter)
 #define gv_edges GV_CAT(gv_edges_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
-
-typedef double gv __attribute__((vector_size(GW * sizeof(double))));
-
-static inline gv gv_set1(double x)
-{
-    double t[GW];
-    for (int k = 0; k < GW; ++k) t[k] = x;
-    gv v;
-    memcpy(&v, t, sizeof v);
-    return v;
-}
-
-/* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of polygon_zh.h */
-static inline gv gv_dot(gv ux, gv uy, gv uz, const double p[3])
-{
-    return ux * gv_set1(p[0]) + uy * gv_set1(p[1]) + uz * gv_set1(p[2]);
-}
-
-static inline void gv_scatter(gv v, double *out, ptrdiff_t stride, int count)
-{
-    double t[GW];
-    memcpy(t, &v, sizeof t);
-    for (int k = 0; k < count; ++k) out[k * stride] = t[k];
-}
 
 /* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes side by side in each band step,
  * as simd/poly_zh_coeff.h does for the coefficients: their recurrences are independent, so
