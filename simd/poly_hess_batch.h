@@ -167,13 +167,15 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     }
     inv_l[lmax + 1] = 1.0 / (lmax + 1), inv_l[lmax + 2] = 1.0 / (lmax + 2); /* past the table at SHL_LMAX_MAX */
     shl__hess_edge he[SHL_MAX_VERTS];
+    /* the lobes' components in lane order, gathered before the blocks (a vector loaded right
+     * after its scalar stores would wait for them: no store forwarding) */
+    double t[3][SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
+    for (int p = 0; p < dp; ++p)
+        for (int c = 0; c < 3; ++c) t[c][p] = shl__zh_dir[lane_lobe(lmax, p < ndir ? p : ndir - 1)][c];
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
-        double t[3][ZW];
-        for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[lane_lobe(lmax, d0 + k < ndir ? d0 + k : ndir - 1)][c];
         hv u[3];
-        for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c], sizeof u[c]);
+        for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c] + d0, sizeof u[c]);
         hv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[SHL_LMAX_MAX + 1][3], hsum[SHL_LMAX_MAX + 1][6];
         for (int l = 0; l <= lmax; ++l) {
             bsum[l] = hv_set1(0.0);
