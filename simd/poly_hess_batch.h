@@ -61,17 +61,71 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
  * lmax + k: their sums and differences are vector operations. */
 static inline int lane_lobe(int lmax, int p) { return p == 0 ? 0 : p <= lmax ? 2 * p - 1 : 2 * (p - lmax); }
 
+enum { NB = SHL__ZH_MULTI, FW = SHL_LMAX_MAX + 1 + ZW }; /* blocks; row length of zh_to_sh_rows' ev, od */
+
+/* Orders c .. c + W - 1 of one part of a band (zh_to_sh_rows) for the ten blocks into
+ * out[b] + at + c: W-lane vectors of type T, each weight vector loaded once for ten
+ * independent sums, per lane the sums of shl__zh_to_sh in its order (a lane's value does
+ * not depend on the chunk's start c).  Whole vectors stored straight from the registers;
+ * lanes past the part land on coefficients written later (bands in order, the odd part
+ * first), so the caller keeps at + c + W <= nc (part_rows). */
+#define DEF_CHUNK(name, T)                                                                                             \
+    __attribute__((always_inline)) static inline void name(const double *w, int pad, int len, int c,                \
+                                                           const double (*f)[FW], double *const *out, int at)         \
+    {                                                                                                                  \
+        T acc[NB];                                                                                                     \
+        _Pragma("GCC unroll 10") for (int b = 0; b < NB; ++b) acc[b] = (T){0};                                         \
+        for (int k = 0; k < len; ++k) {                                                                                \
+            T wk;                                                                                                      \
+            memcpy(&wk, w + k * pad + c, sizeof wk);                                                                   \
+            _Pragma("GCC unroll 10") for (int b = 0; b < NB; ++b) acc[b] += wk * f[b][k];                              \
+        }                                                                                                              \
+        _Pragma("GCC unroll 10") for (int b = 0; b < NB; ++b) memcpy(out[b] + at + c, &acc[b], sizeof acc[b]);         \
+    }
+DEF_CHUNK(chunk_full, hv)
+#if ZW >= 4
+/* Half-width vectors for a part's last 1 .. ZW/2 orders: half the zero-padded lanes */
+typedef double hv_half __attribute__((vector_size(ZW / 2 * sizeof(double))));
+DEF_CHUNK(chunk_half, hv_half)
+#define HW (ZW / 2)
+#else
+#define chunk_half chunk_full
+#define HW ZW
+#endif
+
+/* One part (len orders, weight rows pad apart) of a band into out[b] + at, lim = nc - at
+ * values available from there: chunks of ZW orders, the last 1 .. HW ones at half width.  A
+ * chunk that would run past nc starts earlier instead (lanes of the chunk before it
+ * recomputed: the same bits), or, if no vector fits (lmax < HW), its lanes are summed one
+ * by one (the same sums in the same order). */
+static inline void part_rows(const double *w, int pad, int len, const double (*f)[FW], double *const *out, int at, int lim)
+{
+    for (int c = 0; c < len;) {
+        const int full = len - c > HW, wd = full ? ZW : HW, st = c + wd <= lim ? c : lim - wd;
+        if (st < 0)
+            for (int b = 0; b < NB; ++b)
+                for (int q = c; q < len; ++q) {
+                    double acc = 0.0;
+                    for (int k = 0; k < len; ++k) acc += w[k * pad + q] * f[b][k];
+                    out[b][at + q] = acc;
+                }
+        else if (full)
+            chunk_full(w, pad, len, st, f, out, at);
+        else
+            chunk_half(w, pad, len, st, f, out, at);
+        c += wd;
+    }
+}
+
 /* The reconstruction (Wang 2018 Eq. 33) of the ten blocks b from their lobe rows
  * z[(b (lmax + 1) + l) dp + p] (layout of shl__poly_hess below) into out[b] (nc values each),
- * vectorized across orders m with the transposed weights, the blocks side by side (ten
- * independent sums per weight vector load); per m the sums of shl__zh_to_sh in its order. */
+ * vectorized across orders m with the transposed weights, the blocks side by side. */
 static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
 {
-    enum { NB = SHL__ZH_MULTI };
     const int nc = (lmax + 1) * (lmax + 1);
     const shl__zh_wt_table *wt = shl__zh_wt();
     for (int l = 0; l <= lmax; ++l) {
-        double ev[NB][SHL_LMAX_MAX + 1 + ZW], od[NB][SHL_LMAX_MAX + 1 + ZW]; /* chunks of ZW may run past l */
+        double ev[NB][FW], od[NB][FW]; /* chunks of ZW may run past l */
         for (int b = 0; b < NB; ++b) {
             const double *zl = z + (b * (lmax + 1) + l) * dp;
             ev[b][0] = zl[0];
@@ -88,28 +142,8 @@ static void zh_to_sh_rows(int lmax, const double *z, int dp, double *const *out)
         for (int part = 0; part < 2; ++part) {
             const int len = part ? l + 1 : l, pad = SHL__WT_PAD(len), at = l * l + (part ? l : 0);
             const double *w = part ? wt->even + wt->even_ofs[l] : wt->odd + wt->odd_ofs[l];
-            double(*f)[SHL_LMAX_MAX + 1 + ZW] = part ? ev : od;
-            for (int c = 0; c < len; c += ZW) {
-                hv acc[NB];
-#pragma GCC unroll 10
-                for (int b = 0; b < NB; ++b) acc[b] = hv_set1(0.0);
-                for (int k = 0; k < len; ++k) {
-                    hv wk;
-                    memcpy(&wk, w + k * pad + c, sizeof wk);
-#pragma GCC unroll 10
-                    for (int b = 0; b < NB; ++b) acc[b] += wk * hv_set1(f[b][k]);
-                }
-                /* a whole vector whenever it stays within the nc values: lanes past the row land on
-                 * coefficients written later (bands in order, the odd part first) */
-                for (int b = 0; b < NB; ++b)
-                    if (at + c + ZW <= nc)
-                        memcpy(out[b] + at + c, &acc[b], sizeof acc[b]);
-                    else {
-                        double t[ZW];
-                        memcpy(t, &acc[b], sizeof t);
-                        for (int q = 0; q < len - c; ++q) out[b][at + c + q] = t[q];
-                    }
-            }
+            const double(*f)[FW] = (const double(*)[FW])(part ? ev : od);
+            part_rows(w, pad, len, f, out, at, nc - at);
         }
     }
 }
@@ -133,13 +167,15 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     }
     inv_l[lmax + 1] = 1.0 / (lmax + 1), inv_l[lmax + 2] = 1.0 / (lmax + 2); /* past the table at SHL_LMAX_MAX */
     shl__hess_edge he[SHL_MAX_VERTS];
+    /* the lobes' components in lane order, gathered before the blocks (a vector loaded right
+     * after its scalar stores would wait for them: no store forwarding) */
+    double t[3][SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
+    for (int p = 0; p < dp; ++p)
+        for (int c = 0; c < 3; ++c) t[c][p] = shl__zh_dir[lane_lobe(lmax, p < ndir ? p : ndir - 1)][c];
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
-        double t[3][ZW];
-        for (int k = 0; k < ZW; ++k)
-            for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[lane_lobe(lmax, d0 + k < ndir ? d0 + k : ndir - 1)][c];
         hv u[3];
-        for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c], sizeof u[c]);
+        for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c] + d0, sizeof u[c]);
         hv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[SHL_LMAX_MAX + 1][3], hsum[SHL_LMAX_MAX + 1][6];
         for (int l = 0; l <= lmax; ++l) {
             bsum[l] = hv_set1(0.0);
