@@ -17,6 +17,7 @@
 #include "../src/polygon_hess.h"
 #include "kernel_api.h"
 #include <string.h>
+#include "dvec.h"
 
 #ifdef __clang__
 #pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
@@ -27,22 +28,13 @@
 #else
 #define ZW 2
 #endif
-typedef double hv __attribute__((vector_size(ZW * sizeof(double))));
-
-static inline hv hv_set1(double x)
-{
-    double t[ZW];
-    for (int k = 0; k < ZW; ++k) t[k] = x;
-    hv v;
-    memcpy(&v, t, sizeof v);
-    return v;
-}
+#define HV_CAT2(a, b) a##b
+#define HV_CAT(a, b) HV_CAT2(a, b)
+#define hv HV_CAT(dv, ZW) /* simd/dvec.h */
+#define hv_set1 HV_CAT(hv, _set1)
 
 /* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of shl__dot3 */
-static inline hv hv_dot(const hv u[3], const double p[3])
-{
-    return u[0] * hv_set1(p[0]) + u[1] * hv_set1(p[1]) + u[2] * hv_set1(p[2]);
-}
+static inline hv hv_dot(const hv u[3], const double p[3]) { return HV_CAT(hv, _dot)(u[0], u[1], u[2], p); }
 
 /* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums:
  * il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of the gradient. */
