@@ -186,7 +186,8 @@ static SHL__ALWAYS_INLINE int entry_geom_f(shl__sphere_geom *g, const double xd[
 {
     const double v[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
     const double d2 = shl__dot3(v, v);
-    const int ok = (d2 <= DBL_MAX) & (radius > 0.0) & (radius <= FLT_MAX) & (!want_grad || (moderate(v, radius) & (radius * radius >= SHL__S2_TINY_F * d2)));
+    const int grad_ok = moderate(v, radius) & (radius * radius >= SHL__S2_TINY_F * d2);
+    const int ok = (d2 <= DBL_MAX) & (radius > 0.0) & (radius <= FLT_MAX) & (!want_grad || grad_ok);
     if (ok && need) geom_units_f(g, v, d2, radius);
     return ok;
 }

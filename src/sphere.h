@@ -28,8 +28,8 @@ typedef struct {
      * k_alpha_x 2^s2_e with s2_x in [2^-4, 4) (formed from r/d times a power of two,
      * so never subnormal); x_scale = 2^(s2_e - e) (product), the gradient's factor from
      * units of s2_x and scaled lengths.  Every w_l, al_l, be_l is proportional to s2,
-     * so the kernels use the _x values where s2 itself would lose bits (below
-     * SHL__S2_TINY of the precision) and scale the results once. */
+     * so the gradient kernels use the _x values where s2 itself would lose bits (below
+     * SHL__S2_TINY_D, resp. _F) and scale the results once. */
     int s2_e;
     double s2_x, t_x, k_alpha_x, x_scale[2];
 } shl__sphere_geom;

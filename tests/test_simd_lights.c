@@ -346,13 +346,13 @@ static long double thin_omega(const double v[9], long double nz, const float x[3
  * (|N| = 2^-500 there) made the prepared float data overflow (1/|N| = inf) and the
  * batch return NaN.  Triangles of twice-area 2^-70 (float vertices: also
  * shl_polygon_batch_f) and 2^-499 (light set only), and the minimized reproducer, now
- * take the scalar path: finite coefficients and gradients, and for the triangles L_00 = Omega / sqrt(4 pi) against the long-double
- * closed form.  Tolerance: the scalar float path's geometry is in double, its
- * coefficients are float recurrences (README float contract: 1e-4 Omega + 64 (l+1)
- * eps_f P); here the arcs' contributions to L_00 cancel to Omega ~ 1e-21, so only the
- * absolute term 64 eps_f P K_0 (P: angular perimeter, < 2 pi) applies, with P
- * bounded by 2 pi: 64 * 2 pi eps_f K_0 = 2.7e-5.  (The scalar float path's L_00 is
- * ~1e-17 here where Omega / sqrt(4 pi) ~ 1e-22: float boundary-sum noise, inside that
+ * take the scalar path: finite coefficients and gradients, and for the triangles
+ * L_00 = Omega / sqrt(4 pi) against the long-double closed form.  Tolerance: the scalar
+ * float path's geometry is in double, its coefficients are float recurrences (float
+ * contract, tests/fuzz/README.md: K_l (1e-4 Omega + 64 (l+1) eps_f P)); here the arcs'
+ * contributions to L_00 cancel to Omega ~ 1e-21, so the absolute term dominates, with
+ * the angular perimeter P of a spherical triangle below 2 pi: 64 * 2 pi eps_f K_0 =
+ * 2.7e-5.  (The scalar float path's L_00 is ~1e-17 here where Omega / sqrt(4 pi) ~ 1e-22: float boundary-sum noise, inside that
  * contract; the NaN was the defect.) */
 SHL_TEST(simd_lights_thin_polygon_scalar_path)
 {

@@ -637,7 +637,8 @@ SHL_TEST(sphere_sin2_underflow_gradient)
             const int es = 33 + (int)(rng_uniform(&rg) * (es_max - 33));
             const double d = ldexp(rng_range(&rg, 1.0, 2.0), ed);
             float rf = (float)ldexp(rng_range(&rg, 1.0, 2.0), ed - es);
-            for (int k = 0; k < 3; ++k) cf[k] = (float)ldexp(rng_range(&rg, -1.0, 1.0), ed), xf[k] = (float)(cf[k] - d * dir[k]);
+            for (int k = 0; k < 3; ++k)
+                cf[k] = (float)ldexp(rng_range(&rg, -1.0, 1.0), ed), xf[k] = (float)(cf[k] - d * dir[k]);
             if (it == 0) /* r = 1e-44 seen from 1e-22 (the README's float case) */
                 xf[0] = 1e-22f, xf[1] = xf[2] = 0.0f, cf[0] = cf[1] = cf[2] = 0.0f, rf = 1e-44f;
             for (int k = 0; k < 3; ++k) x[k] = xf[k], c[k] = cf[k];
