@@ -352,8 +352,8 @@ static long double thin_omega(const double v[9], long double nz, const float x[3
  * contract, tests/fuzz/README.md: K_l (1e-4 Omega + 64 (l+1) eps_f P)); here the arcs'
  * contributions to L_00 cancel to Omega ~ 1e-21, so the absolute term dominates, with
  * the angular perimeter P of a spherical triangle below 2 pi: 64 * 2 pi eps_f K_0 =
- * 2.7e-5.  (The scalar float path's L_00 is ~1e-17 here where Omega / sqrt(4 pi) ~ 1e-22: float boundary-sum noise, inside that
- * contract; the NaN was the defect.) */
+ * 2.7e-5.  (The scalar float path's L_00 is ~1e-17 here where Omega / sqrt(4 pi) ~
+ * 1e-22: float boundary-sum noise, inside that contract; the NaN was the defect.) */
 SHL_TEST(simd_lights_thin_polygon_scalar_path)
 {
     const float pts[] = {0.3f, 0.2f, 0.5f, -0.7f, 1.5f, -0.25f, 0.0f, 0.0f, 0.0f, 2.0f, -3.0f, 1e-3f, 0.1f, 0.0f, 4.0f};
