@@ -110,6 +110,17 @@ void shl__batch_poly_eval(const shl_ctx *ctx, const shl__batch_poly *P, const do
         if (grad) memset(grad, 0, sizeof(float) * 3 * nc * (size_t)npts);
         return;
     }
+    if (P->len2 < 0x1p-120) {
+        /* A polygon too thin for the float geometry: |N| (twice its area in the scaled units,
+         * extent in [1, 2)) below 2^-60.  Above it the kernel's float data stay normal and
+         * finite: 1/|N| <= 2^60, |fan_i| <= |c_i| / |N| < 2^64, and a resolved point's
+         * |h| > 2^-16 rmax |N| >= 2^-126 (rmax >= 2^-50, lanes_setup); below it 1/|N| or
+         * fan_i overflowed to inf in float (NaN results: fuzz_lights-polygon-batch-f-nonfinite,
+         * |N| = 2^-500).  Every point takes the scalar path (geometry in double). */
+        for (int p = 0; p < npts; ++p)
+            shl__batch_poly_point(ctx, verts, n, pts + 3 * (size_t)p, coeffs + nc * p, grad ? grad + 3 * nc * p : NULL);
+        return;
+    }
     int redo[SHL__BATCH_BLOCK];
     for (int p0 = 0; p0 < npts; p0 += SHL__BATCH_BLOCK) {
         const int m = npts - p0 < SHL__BATCH_BLOCK ? npts - p0 : SHL__BATCH_BLOCK;

@@ -49,11 +49,21 @@ static void sphere_zh(const shl__light *li, int lmax, const double x[3], double 
         return;
     }
     double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], kw[SHL_LMAX_MAX + 1], kdw[SHL_LMAX_MAX + 1];
+    double wx[SHL_LMAX_MAX + 1], kwg[SHL_LMAX_MAX + 1];
     shl__cap_weights_d(lmax, g.t, g.s2, g.c, w, zh_grad ? dw : NULL);
+    /* sin^2 a below SHL__S2_TINY_D: the gradient in units of s2_x = sin^2 a 2^-s2_e
+     * (w_l and k_alpha are proportional to sin^2 a; dw_l is not), scaled back by
+     * x_scale, as sphere_grad_tiny (sphere_impl.h); the values as before */
+    const int tiny = zh_grad && g.s2_e && g.s2 < SHL__S2_TINY_D;
+    if (tiny) shl__cap_weights_d(lmax, g.t_x, g.s2_x, g.c, wx, NULL);
+    const double ka = tiny ? g.k_alpha_x : g.k_alpha_s, *gs = tiny ? g.x_scale : g.grad_scale;
     for (int l = 0; l <= lmax; ++l) {
         const double k = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
         kw[l] = k * w[l];
-        if (zh_grad) kdw[l] = k * dw[l] * g.k_alpha_s; /* -(d zh / d cos a)(d cos a / dx) . u */
+        if (zh_grad) {
+            kdw[l] = k * dw[l] * ka; /* -(d zh / d cos a)(d cos a / dx) . u */
+            kwg[l] = tiny ? k * wx[l] : kw[l];
+        }
     }
     for (int d = 0; d < ndir; ++d) {
         const double *dir = shl__zh_dir[d];
@@ -74,9 +84,9 @@ static void sphere_zh(const shl__light *li, int lmax, const double x[3], double 
         double *og = zh_grad + d * SHL__ZH_STRIDE;
         for (int l = 0; l <= lmax; ++l) {
             out[l] = kw[l] * p;
-            const double radial = kdw[l] * p, tang = kw[l] * dp;
+            const double radial = kdw[l] * p, tang = kwg[l] * dp;
             for (int a = 0; a < 3; ++a) /* back from scaled units (internal.h) */
-                og[a * SHL__ZH_BLOCK + l] = (-radial * g.u[a] - tang * tan_dir[a]) * g.grad_scale[0] * g.grad_scale[1];
+                og[a * SHL__ZH_BLOCK + l] = (-radial * g.u[a] - tang * tan_dir[a]) * gs[0] * gs[1];
             const double p_next = ((2.0 * l + 1.0) * z * p - l * p_prev) / (l + 1.0);
             const double dp_next = dp_prev + (2.0 * l + 1.0) * p; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
             p_prev = p;

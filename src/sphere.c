@@ -66,6 +66,18 @@ static inline void geom_units(shl__sphere_geom *g, const double vs[3], double rs
     g->inv_d_s = inv;
 }
 
+/* The _x values of shl__sphere_geom from s2_x = sin^2 a 2^-s2_e, e the exponent of
+ * the scaled units; t_x and k_alpha_x as t and k_alpha_s in geom_units and
+ * shl__sphere_geom_init (the same operations on s2_x). */
+static void set_tiny_s2(shl__sphere_geom *g, double s2_x, int s2_e, int e)
+{
+    g->s2_e = s2_e;
+    g->s2_x = s2_x;
+    g->t_x = s2_x / (1.0 + g->c);
+    g->k_alpha_x = s2_x / g->c * g->inv_d_s;
+    shl__pow2_split(s2_e - e, g->x_scale);
+}
+
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius)
 {
@@ -81,6 +93,14 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
     geom_units(g, vs, rs);
     if (g->inside) return;
     g->k_alpha_s = g->s2 / g->c * g->inv_d_s;          /* d cos a / dd = sin^2 a / (d cos a) */
+    g->s2_e = 0;
+    if (g->s2 < SHL__S2_TINY_F && rs > 0.0) {
+        /* sin a = rs / ds times 2^m with rs 2^m in [1, 2) (exact): s2_x = sin^2 a 2^2m is a
+         * normal double even where sin^2 a underflows (r/d < 2^-511) */
+        const int m = -shl__ilogb(rs);
+        const double sx = shl__ldexp(rs, m) * g->inv_d_s;
+        set_tiny_s2(g, sx * sx, -2 * m, e);
+    }
     if (!e) {
         g->grad_scale[0] = g->grad_scale[1] = 1.0;
         g->inv_d = g->inv_d_s;
@@ -135,6 +155,11 @@ static void geom_init_f(shl__sphere_geom *g, const double x[3], const double cen
     }
     g->inv_d_s = shl__ldexp(g->inv_d_s, e);
     g->k_alpha_s = g->s2 / g->c * g->inv_d_s;
+    g->s2_e = 0;
+    if (g->s2 < SHL__S2_TINY_F) { /* s2 a normal double here: 2^-s2_e exact */
+        const int s2_e = shl__ilogb(g->s2);
+        set_tiny_s2(g, shl__ldexp(g->s2, -s2_e), s2_e, e);
+    }
     shl__pow2_split(-e, g->grad_scale);
     g->inv_d = g->inv_d_s * g->grad_scale[0] * g->grad_scale[1];
     g->k_alpha = g->k_alpha_s * g->grad_scale[0] * g->grad_scale[1];
@@ -154,13 +179,15 @@ static SHL__ALWAYS_INLINE int entry_geom_d(shl__sphere_geom *g, const double xd[
 }
 /* Float: finite arguments and a radius in (0, FLT_MAX] suffice for the coefficients
  * (d2 finite exactly when every coordinate is: a float difference cannot overflow a
- * double); the gradient's kernels take unscaled factors, so it also needs moderate(). */
+ * double); the gradient's kernels take unscaled factors, so it also needs moderate()
+ * and sin^2 a = r^2 / d2 >= SHL__S2_TINY_F (else the general path's sphere_grad_tiny). */
 static SHL__ALWAYS_INLINE int entry_geom_f(shl__sphere_geom *g, const double xd[3], const double cd[3], double radius,
                                            int want_grad, int need)
 {
     const double v[3] = {cd[0] - xd[0], cd[1] - xd[1], cd[2] - xd[2]};
     const double d2 = shl__dot3(v, v);
-    const int ok = (d2 <= DBL_MAX) & (radius > 0.0) & (radius <= FLT_MAX) & (!want_grad || moderate(v, radius));
+    const int grad_ok = moderate(v, radius) & (radius * radius >= SHL__S2_TINY_F * d2);
+    const int ok = (d2 <= DBL_MAX) & (radius > 0.0) & (radius <= FLT_MAX) & (!want_grad || grad_ok);
     if (ok && need) geom_units_f(g, v, d2, radius);
     return ok;
 }

@@ -23,7 +23,22 @@ typedef struct {
      * in [1, 2); k_alpha = k_alpha_s 2^-e, inv_d = inv_d_s 2^-e (inf only if beyond DBL_MAX) */
     double k_alpha_s, inv_d_s;
     double grad_scale[2]; /* product 2^-e (shl__pow2_split) */
+    /* Set by shl__sphere_geom_init and the float set-up only.  sin^2 a < 2^-64
+     * (r/d < 2^-32): s2_e != 0 and s2 = s2_x 2^s2_e, t = t_x 2^s2_e, k_alpha_s =
+     * k_alpha_x 2^s2_e with s2_x in [2^-4, 4) (formed from r/d times a power of two,
+     * so never subnormal); x_scale = 2^(s2_e - e) (product), the gradient's factor from
+     * units of s2_x and scaled lengths.  Every w_l, al_l, be_l is proportional to s2,
+     * so the gradient kernels use the _x values where s2 itself would lose bits (below
+     * SHL__S2_TINY_D, resp. _F) and scale the results once. */
+    int s2_e;
+    double s2_x, t_x, k_alpha_x, x_scale[2];
 } shl__sphere_geom;
+
+/* sin^2 a below which the REAL kernels take the _x values of shl__sphere_geom:
+ * 2^62 above the smallest normal, the margin for the kernels' factors (P_l', Y_lm,
+ * 1/d in scaled units) so that no intermediate product is subnormal. */
+#define SHL__S2_TINY_D 0x1p-960
+#define SHL__S2_TINY_F 0x1p-64
 
 void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double center[3],
                            double radius);

@@ -219,8 +219,31 @@ static SHL__ALWAYS_INLINE void SUFFIX(sphere_grad_small)(int lmax, const shl__sp
     }
 }
 
+/* The gradient for sin^2 a below SHL__S2_TINY_D (double), SHL__S2_TINY_F (float)
+ * (sphere.h): shl__sphere_sh in units of s2_x = sin^2 a 2^-s2_e, where s2 itself
+ * would carry few or no significant bits, while every gradient component (~2 s2 / d)
+ * may be a normal number; then times 2^(s2_e - e) (x_scale) from those units and the
+ * scaled lengths', in double, rounded once.  The coefficients (~s2, below the
+ * kernels' normal range) are those of the value path: the same bits with and without
+ * the gradient. */
+static SHL__NOINLINE void SUFFIX(sphere_grad_tiny)(int lmax, const shl__sphere_geom *g, REAL *coeffs, REAL *grad)
+{
+    shl__sphere_geom gx = *g;
+    gx.t = g->t_x, gx.s2 = g->s2_x, gx.k_alpha_s = g->k_alpha_x, gx.s2_e = 0;
+    gx.grad_scale[0] = gx.grad_scale[1] = 1.0;
+    SUFFIX(shl__sphere_sh)(lmax, &gx, coeffs, grad);
+    for (int k = 0; k < 3 * SHL_NCOEFFS(lmax); ++k)
+        grad[k] = (REAL)((double)grad[k] * g->x_scale[0] * g->x_scale[1]);
+    SUFFIX(sphere_value)(lmax, g, coeffs);
+}
+
 void SUFFIX(shl__sphere_sh)(int lmax, const shl__sphere_geom *g, REAL *coeffs, REAL *grad)
 {
+    if (grad && !g->inside && g->s2_e &&
+        g->s2 < (sizeof(REAL) == sizeof(double) ? SHL__S2_TINY_D : SHL__S2_TINY_F)) {
+        SUFFIX(sphere_grad_tiny)(lmax, g, coeffs, grad);
+        return;
+    }
     if (!grad) {
         SUFFIX(sphere_value)(lmax, g, coeffs);
         return;

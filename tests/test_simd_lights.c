@@ -324,3 +324,87 @@ SHL_TEST(simd_lights_float_small_lights)
     harness_note("%d ISAs, lmax %d, error / sum |rgb| omega over d = 1, 10, 100: theta 1e-3 %.1e, 1e-4 %.1e, 1e-5 %.1e "
                  "(tol 1e-4, 1e-3, 1e-3)", isa_count, LM, worst[0], worst[1], worst[2]);
 }
+
+/* Solid angle of the triangle v (z = 0 plane, normal N = (0, 0, nz)) seen from x, long
+ * double, Van Oosterom-Strackee: tan(Omega/2) = |det| / (|a||b||c| + (a.b)|c| + (a.c)|b| +
+ * (b.c)|a|), a, b, c = v_i - x, with det = N . (v_0 - x) = -nz x_z exactly (no cancellation
+ * for a thin triangle, where the triple product formed from a, b, c would lose it all). */
+static long double thin_omega(const double v[9], long double nz, const float x[3])
+{
+    long double a[3][3], len[3];
+    for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 3; ++k) a[i][k] = (long double)v[3 * i + k] - x[k];
+        len[i] = sqrtl(a[i][0] * a[i][0] + a[i][1] * a[i][1] + a[i][2] * a[i][2]);
+    }
+#define DOTL(p, q) (a[p][0] * a[q][0] + a[p][1] * a[q][1] + a[p][2] * a[q][2])
+    const long double den = len[0] * len[1] * len[2] + DOTL(0, 1) * len[2] + DOTL(0, 2) * len[1] + DOTL(1, 2) * len[0];
+#undef DOTL
+    return 2.0L * atan2l(fabsl(nz * (long double)x[2]), den);
+}
+
+/* fuzz_lights-polygon-batch-f-nonfinite: a polygon much thinner than float resolution
+ * (|N| = 2^-500 there) made the prepared float data overflow (1/|N| = inf) and the
+ * batch return NaN.  Triangles of twice-area 2^-70 (float vertices: also
+ * shl_polygon_batch_f) and 2^-499 (light set only), and the minimized reproducer, now
+ * take the scalar path: finite coefficients and gradients, and for the triangles
+ * L_00 = Omega / sqrt(4 pi) against the long-double closed form.  Tolerance: the scalar
+ * float path's geometry is in double, its coefficients are float recurrences (float
+ * contract, tests/fuzz/README.md: K_l (1e-4 Omega + 64 (l+1) eps_f P)); here the arcs'
+ * contributions to L_00 cancel to Omega ~ 1e-21, so the absolute term dominates, with
+ * the angular perimeter P of a spherical triangle below 2 pi: 64 * 2 pi eps_f K_0 =
+ * 2.7e-5.  (The scalar float path's L_00 is ~1e-17 here where Omega / sqrt(4 pi) ~
+ * 1e-22: float boundary-sum noise, inside that contract; the NaN was the defect.) */
+SHL_TEST(simd_lights_thin_polygon_scalar_path)
+{
+    const float pts[] = {0.3f, 0.2f, 0.5f, -0.7f, 1.5f, -0.25f, 0.0f, 0.0f, 0.0f, 2.0f, -3.0f, 1e-3f, 0.1f, 0.0f, 4.0f};
+    const int np = 5, lmax = 6, nc = SHL_NCOEFFS(6);
+    const int exps[2] = {-70, -499};
+    static float rgb[9 * 5 * NCMAX], grad[9 * 5 * NCMAX], single[5 * NCMAX], single_g[3 * 5 * NCMAX];
+    double worst_abs = 0.0;
+    int bad = 0;
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], lmax);
+        if (!ctx) continue;
+        for (int e = 0; e < 2; ++e) {
+            const double tri[9] = {1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, ldexp(1.0, exps[e]), 0.0}, white[3] = {1, 1, 1};
+            shl_lights *set;
+            CHECK(shl_lights_create(&set) == SHL_OK && shl_lights_add_polygon(set, tri, 3, white, 1) == SHL_OK);
+            CHECK(shl_lights_eval_batch_f(ctx, set, np, pts, rgb, grad) == SHL_OK);
+            shl_lights_destroy(set);
+            for (int k = 0; k < 3 * np * nc; ++k) bad += !isfinite(rgb[k]);
+            for (int k = 0; k < 9 * np * nc; ++k) bad += !isfinite(grad[k]);
+            if (e == 0) { /* float vertices are exact here */
+                float tf[9];
+                for (int k = 0; k < 9; ++k) tf[k] = (float)tri[k];
+                CHECK(shl_polygon_batch_f(ctx, tf, 3, np, pts, single, single_g) == SHL_OK);
+                for (int p = 0; p < np; ++p) bad += memcmp(single + nc * p, rgb + 3 * nc * p, sizeof(float) * nc) != 0;
+            }
+            for (int p = 0; p < np; ++p) {
+                /* N = (v1 - v0) x (v2 - v0) = (0, 0, -2^(e+1)) */
+                const long double om = thin_omega(tri, -ldexpl(1.0L, exps[e] + 1), pts + 3 * p);
+                const long double want = om / sqrtl(4.0L * (long double)M_PI);
+                const double err = (double)fabsl(rgb[3 * nc * p] - want);
+                bad += err > 64.0 * 2.0 * M_PI * FLT_EPSILON * 0.2820947917738782;
+                worst_abs = fmax(worst_abs, err);
+            }
+        }
+        { /* the fuzz reproducer, minimized: fan triangles of area ~1 whose Newell sum is
+           * ~2^-492 (|fan_i| ~ 2^492); the point on its vertex at the origin evaluated the
+           * proxy lane with 1/|N| = inf */
+            const double a = 0x1p-492, b = 0x1.2p-493, white[3] = {1, 1, 1};
+            const double poly[15] = {1, 0, 0, -a, -a, -a, -a, -2, -a, -b, -a, -a, 0, 0, 0};
+            shl_lights *set;
+            CHECK(shl_lights_create(&set) == SHL_OK && shl_lights_add_polygon(set, poly, 5, white, 1) == SHL_OK);
+            CHECK(shl_lights_eval_batch_f(ctx, set, np, pts, rgb, grad) == SHL_OK);
+            shl_lights_destroy(set);
+            for (int k = 0; k < 3 * np * nc; ++k) bad += !isfinite(rgb[k]);
+            for (int k = 0; k < 9 * np * nc; ++k) bad += !isfinite(grad[k]);
+        }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(bad == 0);
+    harness_note("thin triangles (2 area 2^-70, 2^-499) and the minimized fuzz polygon, 5 points, every ISA: %d "
+                 "non-finite / mismatched values; "
+                 "max |L_00 - closed form| %.1e (bound 2.7e-5; Omega <= 4e-22)",
+                 bad, worst_abs);
+}

@@ -6,6 +6,7 @@
 #include "harness.h"
 #include "sh_basis.h"
 #include "testutil.h"
+#include <float.h>
 #include <math.h>
 
 enum { L = SHL_LMAX_MAX, NC = SHL_NCOEFFS(SHL_LMAX_MAX) };
@@ -557,4 +558,100 @@ SHL_TEST(sphere_extreme_scales)
     CHECK(bad == 0);
     harness_note("2^-1060..2^1023 (double), 2^-120..2^100 (float): %d values differ from the scaled scale-1 result", bad);
     shl_ctx_destroy(ctx);
+}
+
+/* dL_00/dx of a sphere seen from x in closed form, long double (x87: exponent range to
+ * 1e-4951, so r^2 and d^3 below 1e-600 are exact to 64 bits): L_00 = sqrt(pi) (1 - cos a)
+ * (HVL Eq. 14, l = 0), cos a = sqrt(d^2 - r^2) / d, so d(1 - cos a)/dd = -r^2 / (d^2
+ * sqrt(d^2 - r^2)) and dd/dx = -u: dL_00/dx = sqrt(pi) r^2 u / (d^2 sqrt(d^2 - r^2)). */
+static void l00_grad_ref(const double x[3], const double c[3], double r, long double g[3])
+{
+    long double v[3], d2 = 0.0L;
+    for (int k = 0; k < 3; ++k) v[k] = (long double)c[k] - x[k], d2 += v[k] * v[k];
+    const long double d = sqrtl(d2), rr = (long double)r * r;
+    const long double f = sqrtl((long double)M_PI) * rr / (d2 * sqrtl(d2 - rr)) / d; /* times v = d u */
+    for (int k = 0; k < 3; ++k) g[k] = f * v[k];
+}
+
+/* |grad_00 - ref| / |ref| (Euclidean norms of the three components) */
+static double l00_grad_err(const double g0[3], const long double ref[3])
+{
+    long double e = 0.0L, m = 0.0L;
+    for (int k = 0; k < 3; ++k) e += (g0[k] - ref[k]) * (g0[k] - ref[k]), m += ref[k] * ref[k];
+    return (double)sqrtl(e / m);
+}
+
+/* sin^2 a = (r/d)^2 below the smallest normal (r/d < 2^-511; fuzz_lights-sphere-sin2-
+ * underflow-gradient): the coefficients are subnormal, but the gradient (~2 sqrt(pi)
+ * r^2 / d^3) is a normal number and must keep full relative accuracy in shl_sphere_grad
+ * and shl_lights_eval alike, as at float scale (sin^2 a below FLT_MIN, r/d < 2^-63) in
+ * shl_sphere_grad_f.  Tolerance, first order in eps = DBL_EPSILON/2 per rounding: the
+ * scaled difference c - x (1 rounding), |v|^2 (2.5), d = sqrt (1.75), 1/d (2.25), sin a =
+ * r/d (2.75), sin^2 a (6), k_alpha = sin^2 a / cos a / d (9.25), times 2 pi and K_0
+ * (10.25, 11.25), times u_k (u_k within 3.25: 15 eps); the power-of-two rescale is exact
+ * and the long-double reference within 2^-63: |grad L_00| within 16 eps = 8 DBL_EPSILON.
+ * shl_lights_eval adds K_0 = sqrt(1/(4 pi)) and the ZH -> SH reconstruction of band 0
+ * (a few roundings): 12 DBL_EPSILON.  Float: the kernels' inputs are rounded from
+ * double (0.5 eps_f each) and combined in about eight float operations: 8 FLT_EPSILON.
+ * Before the fix the double error was O(1) (0.6 at the fuzz reproducer's geometry),
+ * the float one 8.6%. */
+SHL_TEST(sphere_sin2_underflow_gradient)
+{
+    rng_t rg = {77};
+    double worst_d = 0.0, worst_l = 0.0, worst_f = 0.0;
+    const int lmaxes[] = {0, 3, 9};
+    for (size_t li = 0; li < sizeof lmaxes / sizeof lmaxes[0]; ++li) {
+        const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
+        shl_ctx *ctx = ctx_or_die(lmax);
+        shl_lights *set = NULL;
+        double co[NC], g[3 * NC], rgb[3 * NC], lg[9 * NC];
+        for (int it = 0; it < 40; ++it) {
+            double dir[3], x[3], c[3];
+            rng_unit_vector(&rg, dir);
+            const int ed = -480 - (int)(rng_uniform(&rg) * 60), es = 512 + (int)(rng_uniform(&rg) * (ed + 1070 - 512));
+            const double d = ldexp(rng_range(&rg, 1.0, 2.0), ed), r = ldexp(rng_range(&rg, 1.0, 2.0), ed - es);
+            for (int k = 0; k < 3; ++k) c[k] = ldexp(rng_range(&rg, -1.0, 1.0), ed), x[k] = c[k] - d * dir[k];
+            if (it == 0) /* the fuzz reproducer's geometry */
+                x[0] = 8.2e-149, x[1] = 8.2e-149, x[2] = -8.4e-149, c[0] = c[1] = c[2] = 0.0;
+            const double rad = it == 0 ? 3.3e-310 : r;
+            long double ref[3];
+            l00_grad_ref(x, c, rad, ref);
+            CHECK(shl_sphere_grad(ctx, x, c, rad, co, g) == SHL_OK);
+            const double g0[3] = {g[0], g[nc], g[2 * nc]};
+            worst_d = fmax(worst_d, l00_grad_err(g0, ref));
+            const double one[3] = {1.0, 1.0, 1.0};
+            CHECK(shl_lights_create(&set) == SHL_OK && shl_lights_add_sphere(set, c, rad, one) == SHL_OK);
+            CHECK(shl_lights_eval(ctx, set, x, rgb, lg) == SHL_OK);
+            shl_lights_destroy(set);
+            const double l0[3] = {lg[0], lg[nc], lg[2 * nc]}; /* channel 0, layout (c*3 + a)*nc + k */
+            worst_l = fmax(worst_l, l00_grad_err(l0, ref));
+        }
+        for (int it = 0; it < 40; ++it) {
+            /* float: d from 2^-75 to 2^-5, r/d from 2^-33 to 2^-es_max with the gradient (~r^2/d^3)
+             * above 2^-115 and r above 2^-140 (normal float results from near-normal inputs) */
+            double dir[3], x[3], c[3];
+            float xf[3], cf[3], cof[NC], gf[3 * NC];
+            rng_unit_vector(&rg, dir);
+            const int ed = -5 - (int)(rng_uniform(&rg) * 70);
+            const int es_max = (115 - ed) / 2 < ed + 140 ? (115 - ed) / 2 : ed + 140;
+            const int es = 33 + (int)(rng_uniform(&rg) * (es_max - 33));
+            const double d = ldexp(rng_range(&rg, 1.0, 2.0), ed);
+            float rf = (float)ldexp(rng_range(&rg, 1.0, 2.0), ed - es);
+            for (int k = 0; k < 3; ++k)
+                cf[k] = (float)ldexp(rng_range(&rg, -1.0, 1.0), ed), xf[k] = (float)(cf[k] - d * dir[k]);
+            if (it == 0) /* r = 1e-44 seen from 1e-22 (the README's float case) */
+                xf[0] = 1e-22f, xf[1] = xf[2] = 0.0f, cf[0] = cf[1] = cf[2] = 0.0f, rf = 1e-44f;
+            for (int k = 0; k < 3; ++k) x[k] = xf[k], c[k] = cf[k];
+            long double ref[3];
+            l00_grad_ref(x, c, rf, ref);
+            CHECK(shl_sphere_grad_f(ctx, xf, cf, rf, cof, gf) == SHL_OK);
+            const double g0[3] = {gf[0], gf[nc], gf[2 * nc]};
+            worst_f = fmax(worst_f, l00_grad_err(g0, ref));
+        }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(worst_d <= 8.0 * DBL_EPSILON && worst_l <= 12.0 * DBL_EPSILON && worst_f <= 8.0 * FLT_EPSILON);
+    harness_note("r/d 2^-512..2^-590, |grad L_00| rel err vs closed form: shl_sphere_grad %.1e eps, shl_lights_eval "
+                 "%.1e eps; float r/d 2^-33..2^-95: %.2f eps_f",
+                 worst_d / DBL_EPSILON, worst_l / DBL_EPSILON, worst_f / FLT_EPSILON);
 }
