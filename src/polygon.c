@@ -341,17 +341,20 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
-    double clen_e[SHL_MAX_VERTS];
+    /* Loops by stage (cross products, atan2 calls, divisions): the edges' chains overlap. */
+    double cv[SHL_MAX_VERTS][3], clen_e[SHL_MAX_VERTS], dotp_e[SHL_MAX_VERTS];
     for (int e = 0; e < m; ++e) {
         const int f = (e + 1) % m;
-        const double *edge = edges[e];
-        double c[3];
-        shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
-        const double clen = norm3(c);
-        clen_e[e] = clen;
-        /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
-        const double dotp = shl__dot3(g->rel[e], g->rel[f]), rr = g->dist[e] * g->dist[f];
-        g->gamma[e] = atan2(clen, dotp);
+        shl__cross3(g->rel[e], edges[e], cv[e]); /* = rel_e x rel_f without cancellation */
+        clen_e[e] = norm3(cv[e]);
+        dotp_e[e] = shl__dot3(g->rel[e], g->rel[f]);
+    }
+    /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
+    for (int e = 0; e < m; ++e) g->gamma[e] = atan2(clen_e[e], dotp_e[e]);
+    for (int e = 0; e < m; ++e) {
+        const int f = (e + 1) % m;
+        const double *edge = edges[e], *c = cv[e];
+        const double clen = clen_e[e], dotp = dotp_e[e], rr = g->dist[e] * g->dist[f];
         if (rr >= 0x1p-900) { /* |c| = r_e r_f sin(gamma), rel_e . rel_f = r_e r_f cos(gamma): a few ulps */
             g->sin_gamma[e] = clen / rr;
             g->cos_gamma[e] = dotp / rr;
