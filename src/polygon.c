@@ -325,7 +325,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
         }
     }
     double edges[SHL_MAX_VERTS][3]; /* from the input vertices: exact for nearby ones */
-    for (int e = 0; e < m; ++e) scaled_sub3(kept + 3 * ((e + 1) % m), kept + 3 * e, -ex, edges[e]);
+    for (int e = 0; e < m; ++e) scaled_sub3(kept + 3 * (e + 1 == m ? 0 : e + 1), kept + 3 * e, -ex, edges[e]);
     double extent;
     const double omega = solid_angle((const double(*)[3])g->rel, g->dist, (const double(*)[3])edges, kept, m, -ex,
                                      nrm, height, &extent);
@@ -344,7 +344,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     /* Loops by stage (cross products, atan2 calls, divisions): the edges' chains overlap. */
     double cv[SHL_MAX_VERTS][3], clen_e[SHL_MAX_VERTS], dotp_e[SHL_MAX_VERTS];
     for (int e = 0; e < m; ++e) {
-        const int f = (e + 1) % m;
+        const int f = e + 1 == m ? 0 : e + 1;
         shl__cross3(g->rel[e], edges[e], cv[e]); /* = rel_e x rel_f without cancellation */
         clen_e[e] = norm3(cv[e]);
         dotp_e[e] = shl__dot3(g->rel[e], g->rel[f]);
@@ -352,7 +352,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
     for (int e = 0; e < m; ++e) g->gamma[e] = atan2(clen_e[e], dotp_e[e]);
     for (int e = 0; e < m; ++e) {
-        const int f = (e + 1) % m;
+        const int f = e + 1 == m ? 0 : e + 1;
         const double *edge = edges[e], *c = cv[e];
         const double clen = clen_e[e], dotp = dotp_e[e], rr = g->dist[e] * g->dist[f];
         if (rr >= 0x1p-900) { /* |c| = r_e r_f sin(gamma), rel_e . rel_f = r_e r_f cos(gamma): a few ulps */
@@ -389,7 +389,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     if (!with_grad) return;
     /* A loop of its own: the edges' division chains (mu, then gvec) overlap. */
     for (int e = 0; e < m; ++e) {
-        const int f = (e + 1) % m;
+        const int f = e + 1 == m ? 0 : e + 1;
         const double clen = clen_e[e];
         if (clen > 0.0) {
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
