@@ -151,9 +151,10 @@ static void plane_offsets(const double (*rel)[3], int n, const double nrm[3], do
  * to a few ulps from a (plane_height) and the in-plane geometry, so the cancellation
  * left is that of the planar picture (~ distance of F / depth of the polygon), not
  * 1/a.  The form whose terms have the smaller magnitude sum is returned (that sum
- * times a few eps bounds its rounding error).  *extent_out = the polygon's size. */
-static double solid_angle(const double (*rel)[3], const double *dist, const double *verts, int n, int e,
-                          const double nrm[3], double height, double *extent_out)
+ * times a few eps bounds its rounding error).  *extent_out = the polygon's size;
+ * edges[i] = (v_{i+1} - v_i) 2^e. */
+static double solid_angle(const double (*rel)[3], const double *dist, const double (*edges)[3], const double *verts,
+                          int n, int e, const double nrm[3], double height, double *extent_out)
 {
     double ext2 = 0.0, total = 0.0;
     for (int i = 1; i < n; ++i) {
@@ -187,9 +188,8 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
         const double *ei = off[i], *ej = off[j];
-        double edge[3], c[3];
-        scaled_sub3(verts + 3 * j, verts + 3 * i, e, edge); /* e_i x e_j = e_i x (v_j - v_i) */
-        shl__cross3(ei, edge, c);
+        double c[3];
+        shl__cross3(ei, edges[i], c); /* e_i x e_j = e_i x (v_j - v_i) */
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
         const double si = s_i[i], sj = s_i[j];
         const double pair = dot >= 0.0 ? ri * rj + dot
@@ -314,13 +314,21 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
                 kept[3 * i + k] = kept[3 * j + k];
                 kept[3 * j + k] = t;
             }
-        for (int i = 0; i < m; ++i) {
-            scaled_sub3(kept + 3 * i, x, -ex, g->rel[i]);
-            g->dist[i] = norm3(g->rel[i]);
+        for (int i = 0, j = m - 1; i < j; ++i, --j) { /* rel, dist of the reversed vertices: the same rows */
+            double t[3];
+            memcpy(t, g->rel[i], sizeof t);
+            memcpy(g->rel[i], g->rel[j], sizeof t);
+            memcpy(g->rel[j], t, sizeof t);
+            const double d = g->dist[i];
+            g->dist[i] = g->dist[j];
+            g->dist[j] = d;
         }
     }
+    double edges[SHL_MAX_VERTS][3]; /* from the input vertices: exact for nearby ones */
+    for (int e = 0; e < m; ++e) scaled_sub3(kept + 3 * (e + 1 == m ? 0 : e + 1), kept + 3 * e, -ex, edges[e]);
     double extent;
-    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, kept, m, -ex, nrm, height, &extent);
+    const double omega = solid_angle((const double(*)[3])g->rel, g->dist, (const double(*)[3])edges, kept, m, -ex,
+                                     nrm, height, &extent);
     g->n = m;
     g->solid_angle = omega;
     shl__pow2_split(-ex, g->grad_scale); /* d/dx = 2^-ex d/dx_scaled */
@@ -333,15 +341,20 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
 
     for (int e = 0; e < m; ++e)
         for (int k = 0; k < 3; ++k) g->w[e][k] = g->rel[e][k] / g->dist[e];
+    /* Loops by stage (cross products, atan2 calls, divisions): the edges' chains overlap. */
+    double cv[SHL_MAX_VERTS][3], clen_e[SHL_MAX_VERTS], dotp_e[SHL_MAX_VERTS];
     for (int e = 0; e < m; ++e) {
-        const int f = (e + 1) % m;
-        double edge[3], c[3];
-        scaled_sub3(kept + 3 * f, kept + 3 * e, -ex, edge); /* from the input vertices: exact for nearby ones */
-        shl__cross3(g->rel[e], edge, c); /* = rel_e x rel_f without cancellation */
-        const double clen = norm3(c);
-        /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
-        const double dotp = shl__dot3(g->rel[e], g->rel[f]), rr = g->dist[e] * g->dist[f];
-        g->gamma[e] = atan2(clen, dotp);
+        const int f = e + 1 == m ? 0 : e + 1;
+        shl__cross3(g->rel[e], edges[e], cv[e]); /* = rel_e x rel_f without cancellation */
+        clen_e[e] = norm3(cv[e]);
+        dotp_e[e] = shl__dot3(g->rel[e], g->rel[f]);
+    }
+    /* Wang 2018 Eq. 20: gamma from atan2 is accurate for tiny and near-pi arcs */
+    for (int e = 0; e < m; ++e) g->gamma[e] = atan2(clen_e[e], dotp_e[e]);
+    for (int e = 0; e < m; ++e) {
+        const int f = e + 1 == m ? 0 : e + 1;
+        const double *edge = edges[e], *c = cv[e];
+        const double clen = clen_e[e], dotp = dotp_e[e], rr = g->dist[e] * g->dist[f];
         if (rr >= 0x1p-900) { /* |c| = r_e r_f sin(gamma), rel_e . rel_f = r_e r_f cos(gamma): a few ulps */
             g->sin_gamma[e] = clen / rr;
             g->cos_gamma[e] = dotp / rr;
@@ -369,19 +382,28 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
         if (clen > 0.0) {
             for (int k = 0; k < 3; ++k) g->mu[e][k] = c[k] / clen;
             shl__cross3(g->mu[e], g->w[e], g->lam[e]);
-            if (!with_grad) continue;
+        } else { /* underflowed arc: contributes nothing (gamma = 0, c_e = 0) */
+            for (int k = 0; k < 3; ++k) g->mu[e][k] = g->lam[e][k] = 0.0;
+        }
+    }
+    if (!with_grad) return;
+    /* A loop of its own: the edges' division chains (mu, then gvec) overlap. */
+    for (int e = 0; e < m; ++e) {
+        const int f = e + 1 == m ? 0 : e + 1;
+        const double clen = clen_e[e];
+        if (clen > 0.0) {
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
              * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
             double q[3], gxmu[3];
-            shl__cross3(edge, g->mu[e], q);
+            shl__cross3(edges[e], g->mu[e], q);
             for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen;
             shl__cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
             g->fprime1[e] = shl__dot3(g->w[f], gxmu);
             /* I_0 = g . int_0^gamma w(t) dt = g . (w_e sin(gamma) + lambda_e (1 - cos(gamma))) */
             g->f_integral[e] = shl__dot3(g->gvec[e], g->w[e]) * g->sin_gamma[e] +
                                shl__dot3(g->gvec[e], g->lam[e]) * g->omc_gamma[e];
-        } else { /* underflowed arc: contributes nothing (gamma = 0, c_e = 0) */
-            for (int k = 0; k < 3; ++k) g->mu[e][k] = g->lam[e][k] = g->gvec[e][k] = 0.0;
+        } else {
+            for (int k = 0; k < 3; ++k) g->gvec[e][k] = 0.0;
             g->fprime1[e] = g->f_integral[e] = 0.0;
         }
     }
