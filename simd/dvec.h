@@ -9,6 +9,10 @@
 #include <stddef.h>
 #include <string.h>
 
+#ifdef __clang__
+#pragma clang fp contract(off) /* as gcc in C11 mode: u . p rounds as the scalar ISA's (no FMA) */
+#endif
+
 #define SHL__DVEC(W)                                                                                   \
     typedef double dv##W __attribute__((vector_size(W * sizeof(double))));                            \
     static inline dv##W dv##W##_set1(double x)                                                         \
