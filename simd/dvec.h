@@ -10,7 +10,15 @@
 #include <string.h>
 
 #ifdef __clang__
-#pragma clang fp contract(off) /* as gcc in C11 mode: u . p rounds as the scalar ISA's (no FMA) */
+#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one (no FMA) */
+#endif
+
+/* The kernels' full width: the ISA's double lanes, at least 2 (the scalar ISA: two SSE2 /
+ * NEON lanes or plain code). */
+#if defined(SHL_VDLEN) && SHL_VDLEN > 2
+#define SHL_DVEC_WIDTH SHL_VDLEN
+#else
+#define SHL_DVEC_WIDTH 2
 #endif
 
 #define SHL__DVEC(W)                                                                                   \

@@ -3,7 +3,7 @@
  * scalar reference shl__poly_zh_hess_d (src/polygon_hess.c, derivation (H1)-(H6)
  * there) for ZW lobes side by side in one vector, ZW = the ISA's double width
  * SHL_VDLEN (8 on AVX-512, 4 on AVX2), at least 2.  Generic vector types, no fused
- * multiply-add (gcc's C11 mode and the clang pragma below): each lane does exactly
+ * multiply-add (gcc's C11 mode and the clang pragma of dvec.h): each lane does exactly
  * the reference's one-lobe arithmetic, so every ISA gives the reference's bits
  * (tests/test_hessian.c, hess_isa_kernels_match_reference).  The contraction
  * of (H2) is done inside the band loop instead of after it (the same sums, edges in
@@ -17,17 +17,9 @@
 #include "../src/polygon_hess.h"
 #include "kernel_api.h"
 #include <string.h>
-#include "dvec.h"
+#include "dvec.h" /* also: no FMA contraction, every ISA rounds as the scalar one */
 
-#ifdef __clang__
-#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
-#endif
-
-#if defined(SHL_VDLEN) && SHL_VDLEN > 2
-#define ZW SHL_VDLEN
-#else
-#define ZW 2
-#endif
+#define ZW SHL_DVEC_WIDTH
 #define HV_CAT2(a, b) a##b
 #define HV_CAT(a, b) HV_CAT2(a, b)
 #define hv HV_CAT(dv, ZW) /* simd/dvec.h */

@@ -6,7 +6,7 @@
  * plain code).  The lobes' recurrences are independent, so one band step of ZW
  * lobes is one chain of vector operations instead of ZW chains.  Written with the
  * compilers' generic vector type (elementwise + - *, no fused multiply-add: gcc's
- * C11 mode and the clang pragma below), each lane does exactly the one-lobe
+ * C11 mode and the clang pragma of dvec.h), each lane does exactly the one-lobe
  * arithmetic of polygon_zh.h (and of the Hessian's recurrence, polygon_hess.c,
  * whose values and gradients test_hessian compares with these), so all ISAs give
  * the same bits.  A partial last block repeats its last lobe.  Compiled once
@@ -15,17 +15,9 @@
 #include "../src/polygon.h"
 #include "kernel_api.h"
 #include <string.h>
-#include "dvec.h"
+#include "dvec.h" /* also: no FMA contraction, every ISA rounds as the scalar one */
 
-#ifdef __clang__
-#pragma clang fp contract(off) /* as gcc in C11 mode: every ISA rounds as the scalar one */
-#endif
-
-#if defined(SHL_VDLEN) && SHL_VDLEN > 2
-#define ZW SHL_VDLEN
-#else
-#define ZW 2
-#endif
+#define ZW SHL_DVEC_WIDTH
 /* Every lobe of zh_lanes' outputs (gv_block of simd/poly_zh_grad.h): blocks of ZW lobes, a
  * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors (as shl__poly_zh below). */
 #define GV_BLOCK2(w) gv_block_##w
