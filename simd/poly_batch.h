@@ -125,10 +125,12 @@ typedef double vdl __attribute__((vector_size(VD * sizeof(double))));
 typedef long long vml __attribute__((vector_size(VD * sizeof(long long))));
 typedef float vfl __attribute__((vector_size(VD * sizeof(float))));
 
-static inline vdl vdl_set1(double a)
+static inline vdl vdl_set1(double a) /* through memory: see lanes_setup on valgrind */
 {
+    double t[VD];
+    for (int j = 0; j < VD; ++j) t[j] = a;
     vdl v;
-    for (int j = 0; j < VD; ++j) v[j] = a;
+    memcpy(&v, t, sizeof v);
     return v;
 }
 static inline vdl vdl_sel(vml m, vdl a, vdl b) { return (vdl)(((vml)a & m) | ((vml)b & ~m)); } /* m ? a : b */
@@ -155,12 +157,17 @@ static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, w
     const double hp = -(P->normal[0] * P->proxy[0] + P->normal[1] * P->proxy[1] + P->normal[2] * P->proxy[2]);
     int count = 0;
     for (int j0 = 0; j0 < VL; j0 += VD) {
-        vdl x[3], lane;
+        double xs[3][VD], ls[VD];
         for (int j = 0; j < VD; ++j) { /* lanes past nvalid repeat point 0 (finite; masked below) */
             const float *pt = pts + 3 * (j0 + j < nvalid ? j0 + j : 0);
-            for (int k = 0; k < 3; ++k) x[k][j] = pt[k] * P->inv_scale;
-            lane[j] = j0 + j;
+            for (int k = 0; k < 3; ++k) xs[k][j] = pt[k] * P->inv_scale;
+            ls[j] = j0 + j;
         }
+        /* whole-vector loads: element-wise insertion made gcc emit the register form of
+         * VEX vmovq (0xD6), which valgrind 3.19 (make test-valgrind) cannot decode */
+        vdl x[3], lane;
+        memcpy(x, xs, sizeof x);
+        memcpy(&lane, ls, sizeof lane);
         vdl rmax2 = vdl_set1(0.0), rmin2 = vdl_set1(HUGE_VAL);
         for (int i = 0; i < P->n; ++i) {
             const vdl d0 = vdl_set1(P->vd[i][0]) - x[0], d1 = vdl_set1(P->vd[i][1]) - x[1];
