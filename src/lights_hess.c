@@ -1,8 +1,9 @@
 /* Light sets with second derivatives: as shl__lights_eval (lights.c), each
- * light's lobe integrals, their gradient and their Hessian (polygon_hess.c,
- * sphere_hess.c) are accumulated per colour channel and reconstructed once per
- * point (Wang 2018 Eq. 33 is linear): 3 x 10 reconstructions per point, in three
- * calls of shl__zh_to_sh_multi. */
+ * polygon's lobe integrals, their gradient and their Hessian (polygon_hess.c) are
+ * accumulated per colour channel and reconstructed once per point (Wang 2018 Eq. 33
+ * is linear): 3 x 10 reconstructions per point, in three calls of
+ * shl__zh_to_sh_multi.  Spheres are added after, directly in the SH basis
+ * (shl__sphere_sh_d, shl__sphere_sh_hess: no lobe integrals to reconstruct). */
 #include "lights.h"
 #include "polygon.h"
 #include "sphere.h"
@@ -12,32 +13,39 @@ enum { NBLK = SHL__ZH_MULTI }; /* value, 3 gradient, 6 Hessian components, inter
 
 size_t shl__lights_hess_ws_size(int lmax) { return 4 * (size_t)SHL__Z10_SIZE(lmax); } /* one light, 3 colours */
 
-/* The interleaved lobe integrals of one unit-radiance light at x, unscaled; 0 if it does not reach x. */
-static int light_zh_hess(const shl_lights *lights, const shl__light *li, int lmax, const double x[3], double *z10)
+/* The interleaved lobe integrals of one unit-radiance polygon light at x, unscaled; 0 if it does not reach x. */
+static int polygon_zh_hess(const shl_lights *lights, const shl__light *li, int lmax, const double x[3], double *z10)
 {
-    switch (li->kind) {
-    case SHL__LIGHT_POLYGON: {
-        shl__poly_geom g;
-        if (!shl__light_poly_geom(lights, li, x, &g)) return 0;
-        const int fold = shl__poly_hess_fold(&g);
-        shl__poly_zh_hess_d(&g, lmax, z10, fold);
-        if (!fold) /* gradient: 2^-E once, Hessian: twice */
-            for (int d = 0; d <= 2 * lmax; ++d)
-                for (int l = 0; l <= lmax; ++l) {
-                    double *o = z10 + SHL__Z10(lmax, d, l);
-                    shl__poly_grad_unscale(&g, o + 1, NBLK - 1);
-                    shl__poly_grad_unscale(&g, o + 4, NBLK - 4);
-                }
-        return 1;
+    shl__poly_geom g;
+    if (!shl__light_poly_geom(lights, li, x, &g)) return 0;
+    const int fold = shl__poly_hess_fold(&g);
+    shl__poly_zh_hess_d(&g, lmax, z10, fold);
+    if (!fold) /* gradient: 2^-E once, Hessian: twice */
+        for (int d = 0; d <= 2 * lmax; ++d)
+            for (int l = 0; l <= lmax; ++l) {
+                double *o = z10 + SHL__Z10(lmax, d, l);
+                shl__poly_grad_unscale(&g, o + 1, NBLK - 1);
+                shl__poly_grad_unscale(&g, o + 4, NBLK - 4);
+            }
+    return 1;
+}
+
+/* Sphere light li seen from x, radiance rgb_c, added to the outputs; sh (10 nc doubles)
+ * receives its unit-radiance coefficients, gradient and Hessian (as shl_sphere_hess). */
+static void add_sphere_hess(const shl__light *li, int lmax, const double x[3], double *sh, double *rgb, double *grad,
+                            double *hess)
+{
+    const int nc = SHL_NCOEFFS(lmax);
+    shl__sphere_geom g;
+    shl__sphere_geom_init(&g, x, li->center, li->radius);
+    shl__sphere_sh_d(lmax, &g, sh, sh + nc);
+    shl__sphere_sh_hess(lmax, &g, sh + 4 * nc, nc);
+    for (int c = 0; c < 3; ++c) {
+        const double s = li->rgb[c];
+        for (int k = 0; k < nc; ++k) rgb[c * nc + k] += s * sh[k];
+        for (int k = 0; k < 3 * nc; ++k) grad[c * 3 * nc + k] += s * sh[nc + k];
+        for (int k = 0; k < 6 * nc; ++k) hess[c * 6 * nc + k] += s * sh[4 * nc + k];
     }
-    case SHL__LIGHT_SPHERE: {
-        shl__sphere_geom g;
-        shl__sphere_geom_init(&g, x, li->center, li->radius);
-        shl__sphere_zh_hess(&g, lmax, z10);
-        return 1;
-    }
-    }
-    return 0;
 }
 
 void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const double x[3], double *rgb,
@@ -49,7 +57,7 @@ void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const
     memset(acc, 0, sizeof(double) * 3 * na);
     for (int i = 0; i < lights->count; ++i) {
         const shl__light *li = &lights->items[i];
-        if (!light_zh_hess(lights, li, lmax, x, z10)) continue;
+        if (li->kind != SHL__LIGHT_POLYGON || !polygon_zh_hess(lights, li, lmax, x, z10)) continue;
         for (int c = 0; c < 3; ++c) {
             const double s = li->rgb[c];
             double *dst = acc + c * na;
@@ -62,6 +70,8 @@ void shl__lights_eval_hess(const shl_lights *lights, int lmax, double *ws, const
                                             h + nc,       h + 2 * nc, h + 3 * nc, h + 4 * nc, h + 5 * nc};
         shl__zh_to_sh_multi(lmax, acc + c * na, out);
     }
+    for (int i = 0; i < lights->count; ++i) /* z10 (na >= 10 nc doubles) free again */
+        if (lights->items[i].kind == SHL__LIGHT_SPHERE) add_sphere_hess(&lights->items[i], lmax, x, z10, rgb, grad, hess);
 }
 
 int shl_lights_eval_hess(const shl_ctx *ctx, const shl_lights *lights, const double x[3], double *rgb,

@@ -46,9 +46,8 @@ void shl__sphere_geom_init(shl__sphere_geom *g, const double x[3], const double 
 void shl__sphere_sh_d(int lmax, const shl__sphere_geom *g, double *coeffs, double *grad);
 void shl__sphere_sh_f(int lmax, const shl__sphere_geom *g, float *coeffs, float *grad);
 
-/* Lobe integrals of the unit-radiance cap seen from x, lobes d <= 2 lmax, with their
- * gradient and second derivatives, unscaled, in the interleaved layout of
- * shl__poly_zh_hess_d (polygon.h); sphere_hess.c. */
-void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10);
+/* The six second-derivative rows hess[i*nc + k] (i = xx, xy, xz, yy, yz, zz) of the
+ * unit-radiance cap's SH coefficients, unscaled; sphere_hess.c. */
+void shl__sphere_sh_hess(int lmax, const shl__sphere_geom *g, double *hess, int nc);
 
 #endif

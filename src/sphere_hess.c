@@ -1,95 +1,121 @@
-/* Second spatial derivatives of a sphere light's lobe integrals and SH
- * coefficients (derivation: README "Hessians", (S1)-(S4)).
- *
- * Lobe d, band l (HVL Eq. 14-15 by Funk-Hecke, as lights.c): Z = K_l W P_l(z) with
- * W = w_l(cos a), w_l(c) = 2 pi int_c^1 P_l, z = dir_d . u, u = (center - x)/dist.
- * cos a = phi(dist) = sqrt(1 - R^2/dist^2) depends on the distance only:
- *   phi' = sin^2 a / (dist cos a) = k,   phi'' = -(k / dist) (3 + sin^2 a / cos^2 a),        (S1)
- * and w_l' = -2 pi P_l(c), w_l'' = -2 pi P_l'(c) (the Legendre polynomials' derivative
- * recurrence).  With d dist/dx = -u, du/dx = -(I - u u^T)/dist, tau = dir - z u:
- *   dz/dx = -tau / dist,   d2z/dx2 = -(z (I - u u^T) + u tau^T + tau u^T) / dist^2,        (S2)
- *   dW/dx = -w' k u,       d2W/dx2 = (w'' k^2 + w' phi'') u u^T + (w' k / dist) (I - u u^T),   (S3)
- * and the product rule gives
- *   d2Z/dx2 / K_l = A u u^T + B (I - u u^T) + C (u tau^T + tau u^T) + D tau tau^T,          (S4)
- *   A = (w'' k^2 + w' phi'') P_l,   B = (w' k P_l - w z P_l' / dist) / dist,
- *   C = P_l' (w' k - w / dist) / dist,   D = w P_l'' / dist^2.
- * For l = 0 this is the Hessian of the solid angle 2 pi (1 - phi(dist)) as a radial function. */
-#include "polygon.h"
+/* Second spatial derivatives of a sphere light's SH coefficients (derivation:
+ * README "Hessians", (S1)-(S7)).  The Hessian is formed directly in the SH basis from
+ * the cap weights and the SH polynomials' first and second derivatives, as the
+ * gradient (sphere_impl.h, sh_basis_impl.h); tests/test_hessian.c checks it against
+ * the lobe-integral route (S4) and finite differences. */
 #include "sphere.h"
-#include "zh_tables.h"
-#include <math.h>
+#include <string.h>
 
-void shl__sphere_zh_hess(const shl__sphere_geom *g, int lmax, double *z10)
+/* The six rows of second derivatives of a sphere light's SH coefficients, directly in the
+ * SH basis: hess[i*nc + k], i = xx, xy, xz, yy, yz, zz (derivation: README "Hessians",
+ * (S5)-(S7)).  Coefficient k = (l, m) is F = W_l(dist) Y_k(u), u = v/dist, v = center - x,
+ * W_l = w_l(cos a) (HVL Eq. 14-15); with the polynomial extension g of Y_k (sh_basis_impl.h:
+ * sqrt2 N_l^m(z) C_m(x, y)), G = grad g(u), H = grad grad g(u), h = H u, P = I - u u^T:
+ *   d2F/dx2 = W'' Y u u^T + (W'/dist) Y P + (W'/dist - W/dist^2)(u q^T + q u^T)
+ *             + (W/dist^2) (P H P - u q^T - q u^T - (u.G) P),   q = P G,          (S5)
+ * (d/dv of Y(v/|v|) twice; the Hessian in x equals the one in v), W' = w' k, W'' = w'' k^2 +
+ * w' phi'' with (S1): cos a = phi(dist) = sqrt(1 - R^2/dist^2), phi' = k = sin^2 a / (dist cos a),
+ * phi'' = -(k/dist)(3 + sin^2 a / cos^2 a), w_l' = -2 pi P_l(c), w_l'' = -2 pi P_l'(c).  Expanded in the ambient basis:
+ *   d2F/dx2 = del H + u e^T + e u^T + bet I + mu u u^T,                             (S6)
+ *   del = W/dist^2, gam = W'/dist - del, bet = (W'/dist) Y - del (u.G), e = gam G - del h,
+ *   mu = W'' Y - bet - 2 gam (u.G) + del (u.h).
+ * On the m-column everything is a per-(l, m) scalar times C_{m-2}, C_{m-1}, C_m (S_ likewise):
+ * with n = N_l^m, n' = dz_lm N_l^{m+1}, n'' = dz_lm dz_l,m+1 N_l^{m+2} (z-derivatives),
+ *   u.G = (m n + z n') C_m,   h = (m C_{m-1} b1, -m S_{m-1} b1, (m n' + z n'') C_m),
+ *   u.h = (m (m-1) n + 2 m z n' + z^2 n'') C_m,  b1 = (m-1) n + z n',                (S7)
+ * from d C_m/dx = m C_{m-1}, d C_m/dy = -m S_{m-1} and x C_{m-1} - y S_{m-1} = C_m; the S_m
+ * column is the C_m column with (C, S) -> (S, -C). */
+void shl__sphere_sh_hess(int lmax, const shl__sphere_geom *g, double *hess, int nc)
 {
-    const int ndir = 2 * lmax + 1;
-    if (g->inside) { /* the whole sphere of directions: constant */
-        for (int d = 0; d < ndir; ++d)
-            for (int l = 0; l <= lmax; ++l) {
-                double *o = z10 + SHL__Z10(lmax, d, l);
-                o[0] = l == 0 ? sqrt(4.0 * M_PI) : 0.0;
-                for (int b = 1; b < SHL__ZH_MULTI; ++b) o[b] = 0.0;
-            }
+    if (g->inside) { /* constant coefficients */
+        memset(hess, 0, sizeof(double) * 6 * (size_t)nc);
         return;
     }
-    /* scaled units (sphere.h): 1/dist and k in units 2^e; results times 2^-e (gradient), 2^-2e (Hessian) */
-    const double id = g->inv_d_s, k = g->k_alpha_s, sc = g->grad_scale[0] * g->grad_scale[1];
-    const double phi2 = -k * id * (3.0 + g->s2 / (g->c * g->c)); /* (S1) */
-    /* 2^-e (gradient) and 2^-2e (Hessian) folded into the per-band factors when that keeps
-     * them normal (a power of two: the same values as multiplying afterwards), else after */
-    const int fold = sc >= 0x1p-500 && sc <= 0x1p500;
-    const double gs = fold ? sc : 1.0, hs = fold ? sc * sc : 1.0;
-    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], cw[SHL_LMAX_MAX + 1][7], ra[SHL_LMAX_MAX + 1], rb[SHL_LMAX_MAX + 1];
-    shl__cap_weights_d(lmax, g->t, g->s2, g->c, w, dw);
-    double pc = 1.0, pc_prev = 0.0, dpc = 0.0, dpc_prev = 0.0; /* P_l(c), P_l'(c) */
+    /* scaled units (sphere.h): 1/dist and k in units 2^e, the Hessian times 2^-2e; below
+     * SHL__S2_TINY_D sin^2 a, t, k in units 2^s2_e (as sphere_grad_tiny), times 2^s2_e */
+    const int tiny = g->s2_e != 0 && g->s2 < SHL__S2_TINY_D;
+    const double s2 = tiny ? g->s2_x : g->s2, t = tiny ? g->t_x : g->t, k = tiny ? g->k_alpha_x : g->k_alpha_s;
+    const double c = g->c, id = g->inv_d_s;
+    const double phi2 = -k * id * (3.0 + g->s2 / (c * c)); /* (S1), in the units of k */
+    double w[SHL_LMAX_MAX + 1], dw[SHL_LMAX_MAX + 1], w2[SHL_LMAX_MAX + 1], gam[SHL_LMAX_MAX + 1],
+        del[SHL_LMAX_MAX + 1], bet[SHL_LMAX_MAX + 1];
+    shl__cap_weights_d(lmax, t, s2, c, w, dw);
+    double d2w = 0.0, d2w_prev = 0.0; /* w_l'' = -2 pi P_l'(c): w''_{l+1} = w''_{l-1} + (2l+1) w_l' */
     for (int l = 0; l <= lmax; ++l) {
-        const double kl = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)), d2w = -2.0 * M_PI * dpc; /* w_l'' */
-        ra[l] = (2.0 * l + 1.0) / (l + 1.0), rb[l] = l / (l + 1.0); /* P_{l+1} = ra z P_l - rb P_{l-1} */
-        cw[l][0] = kl * w[l];
-        cw[l][1] = kl * dw[l] * k * gs;                        /* K w' k: gradient */
-        cw[l][2] = kl * w[l] * id * gs;                        /* K w / dist */
-        cw[l][3] = kl * (d2w * k * k + dw[l] * phi2) * hs;     /* (S4): A / P_l */
-        cw[l][4] = kl * dw[l] * k * id * hs;                   /* B = (c4 P_l - c5 z P_l') */
-        cw[l][5] = kl * w[l] * id * id * hs;                   /* C = (c4 - c5) P_l', D = c5 P_l'' */
-        const double pn = ra[l] * g->c * pc - rb[l] * pc_prev;
-        const double dpn = dpc_prev + (2.0 * l + 1.0) * pc; /* P'_{l+1} = P'_{l-1} + (2l+1) P_l */
-        pc_prev = pc, pc = pn, dpc_prev = dpc, dpc = dpn;
+        const double w1 = dw[l] * k;                          /* W' = w' k */
+        w2[l] = d2w * k * g->k_alpha_s + dw[l] * phi2;        /* W'' (w'' k^2: O(s2) smaller when tiny) */
+        del[l] = w[l] * id * id;
+        bet[l] = w1 * id;
+        gam[l] = bet[l] - del[l];
+        const double next = d2w_prev + (2.0 * l + 1.0) * dw[l];
+        d2w_prev = d2w, d2w = next;
     }
-    const double *u = g->u;
-    static const int ia[6] = {0, 0, 0, 1, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 2};
-    double uu[6];
-    for (int i = 0; i < 6; ++i) uu[i] = u[ia[i]] * u[ib[i]];
-    for (int d = 0; d < ndir; ++d) {
-        const double *dir = shl__zh_dir[d];
-        const double z = fmin(1.0, fmax(-1.0, shl__dot3(dir, u)));
-        const double tau[3] = {dir[0] - z * u[0], dir[1] - z * u[1], dir[2] - z * u[2]};
-        double ut[6], tt[6];
-        for (int i = 0; i < 6; ++i) {
-            ut[i] = u[ia[i]] * tau[ib[i]] + tau[ia[i]] * u[ib[i]];
-            tt[i] = tau[ia[i]] * tau[ib[i]];
+    const double x = g->u[0], y = g->u[1], z = g->u[2];
+    const double xx = x * x, xy = x * y, xz = x * z, yy = y * y, yz = y * z, zz = z * z;
+    double sc[SHL_LMAX_MAX + 1], ss[SHL_LMAX_MAX + 1]; /* sqrt2 C_m, sqrt2 S_m (sh_basis_impl.h) */
+    sc[0] = M_SQRT2, ss[0] = 0.0;
+    for (int m = 1; m <= lmax; ++m) {
+        const double cm = sc[m - 1] * x - ss[m - 1] * y;
+        ss[m] = sc[m - 1] * y + ss[m - 1] * x, sc[m] = cm;
+    }
+    /* rows l-2, l-1, l of N_l^m (sh_basis.h), and n', n'' of row l with zeros past m = l */
+    double rows[3][SHL_LMAX_MAX + 1], d1[SHL_LMAX_MAX + 2], d2[SHL_LMAX_MAX + 1];
+    double *h0 = hess, *h1 = hess + nc, *h2 = hess + 2 * nc, *h3 = hess + 3 * nc, *h4 = hess + 4 * nc,
+           *h5 = hess + 5 * nc;
+    for (int l = 0; l <= lmax; ++l) {
+        const int t3 = l * (l + 1) / 2, base = l * (l + 1);
+        double *ql = rows[l % 3];
+        const double *q1 = rows[(l + 2) % 3], *q2 = rows[(l + 1) % 3];
+        for (int m = 0; m < l - 1; ++m) /* N_l^m = a (z N_{l-1}^m - b N_{l-2}^m) */
+            ql[m] = shl__sh_a_d[t3 + m] * (z * q1[m] - shl__sh_b_d[t3 + m] * q2[m]);
+        if (l > 0) ql[l - 1] = shl__sh_a_d[t3 + l - 1] * z * q1[l - 1];
+        ql[l] = shl__sh_diag_d[l];
+        d1[l] = d1[l + 1] = 0.0;
+        for (int m = 0; m < l; ++m) d1[m] = shl__sh_dz_d[t3 + m] * ql[m + 1];
+        for (int m = 0; m <= l; ++m) d2[m] = shl__sh_dz_d[t3 + m] * d1[m + 1];
+        const double de = del[l], ga = gam[l], be = bet[l], wh = w2[l];
+        { /* m = 0: Y = N_l^0 (no sqrt2), no azimuthal derivatives */
+            const double n = ql[0], e1 = d1[0], e2 = d2[0], ug = z * e1;
+            const double p2 = ga * e1 - de * z * e2, b0 = be * n - de * ug;
+            const double mu = wh * n - b0 - 2.0 * ga * ug + de * zz * e2;
+            h0[base] = b0 + mu * xx, h1[base] = mu * xy, h2[base] = x * p2 + mu * xz;
+            h3[base] = b0 + mu * yy, h4[base] = y * p2 + mu * yz, h5[base] = de * e2 + 2.0 * z * p2 + b0 + mu * zz;
         }
-        double p = 1.0, p_prev = 0.0, dp = 0.0, dp_prev = 0.0, d2p = 0.0, d2p_prev = 0.0; /* P_l, P_l', P_l'' at z */
-        for (int l = 0; l <= lmax; ++l) {
-            double *o = z10 + SHL__Z10(lmax, d, l);
-            o[0] = cw[l][0] * p;
-            const double radial = cw[l][1] * p, tang = cw[l][2] * dp; /* dZ/dx = -radial u - tang tau */
-            for (int a = 0; a < 3; ++a) o[1 + a] = -radial * u[a] - tang * tau[a];
-            /* (S4) with I - u u^T expanded: (A - B) u u^T + B I + C (u tau^T + tau u^T) + D tau tau^T */
-            const double cb = cw[l][4] * p - cw[l][5] * z * dp, ca = cw[l][3] * p - cb;
-            const double cc = (cw[l][4] - cw[l][5]) * dp, cd = cw[l][5] * d2p;
-            for (int i = 0; i < 6; ++i) o[4 + i] = ca * uu[i] + cc * ut[i] + cd * tt[i];
-            o[4] += cb, o[7] += cb, o[9] += cb;
-            const double pn = ra[l] * z * p - rb[l] * p_prev;
-            const double dpn = dp_prev + (2.0 * l + 1.0) * p, d2pn = d2p_prev + (2.0 * l + 1.0) * dp;
-            p_prev = p, p = pn, dp_prev = dp, dp = dpn, d2p_prev = d2p, d2p = d2pn;
+        for (int m = 1; m <= l; ++m) {
+            const double fm = m, n = ql[m], e1 = d1[m], e2 = d2[m];
+            const double ug = fm * n + z * e1, b1 = ug - n; /* (S7): u.G / C_m, b1 */
+            const double p1 = fm * (ga * n - de * b1);       /* e = (p1 C_{m-1}, -p1 S_{m-1}, p2 C_m) */
+            const double p2 = ga * e1 - de * (fm * e1 + z * e2);
+            const double b0 = be * n - de * ug;              /* bet / C_m */
+            const double mu = wh * n - b0 - 2.0 * ga * ug + de * (fm * (fm - 1.0) * n + 2.0 * fm * z * e1 + zz * e2);
+            const double hh = de * fm * (fm - 1.0) * n, hz = de * fm * e1 + z * p1;
+            const double cxx = b0 + mu * xx, cxy = mu * xy, cxz = x * p2 + mu * xz, cyy = b0 + mu * yy,
+                         cyz = y * p2 + mu * yz, czz = de * e2 + 2.0 * z * p2 + b0 + mu * zz;
+            const double c0 = sc[m], s0 = ss[m], c1 = sc[m - 1], s1 = ss[m - 1];
+            const double c2 = m >= 2 ? sc[m - 2] : 0.0, s2m = m >= 2 ? ss[m - 2] : 0.0;
+            const double px = 2.0 * x * p1, py = 2.0 * y * p1;
+            const int kp = base + m, kn = base - m;
+            h0[kp] = hh * c2 + px * c1 + cxx * c0;
+            h1[kp] = p1 * (y * c1 - x * s1) - hh * s2m + cxy * c0;
+            h2[kp] = hz * c1 + cxz * c0;
+            h3[kp] = cyy * c0 - hh * c2 - py * s1;
+            h4[kp] = cyz * c0 - hz * s1;
+            h5[kp] = czz * c0;
+            h0[kn] = hh * s2m + px * s1 + cxx * s0;
+            h1[kn] = p1 * (y * s1 + x * c1) + hh * c2 + cxy * s0;
+            h2[kn] = hz * s1 + cxz * s0;
+            h3[kn] = cyy * s0 - hh * s2m + py * c1;
+            h4[kn] = cyz * s0 + hz * c1;
+            h5[kn] = czz * s0;
         }
     }
-    if (!fold) /* back from scaled units, in double (internal.h) */
-        for (int d = 0; d < ndir; ++d)
-            for (int l = 0; l <= lmax; ++l) {
-                double *o = z10 + SHL__Z10(lmax, d, l);
-                for (int b = 1; b < SHL__ZH_MULTI; ++b) o[b] = o[b] * sc;
-                for (int b = 4; b < SHL__ZH_MULTI; ++b) o[b] = o[b] * sc;
-            }
+    int e2x = -(shl__ilogb(g->grad_scale[0]) + shl__ilogb(g->grad_scale[1])); /* e of 2^-e */
+    e2x = (tiny ? g->s2_e : 0) - 2 * e2x;
+    if (e2x) { /* back from scaled units: 2^(s2_e - 2e) in two equal-signed factors (internal.h) */
+        double f[2];
+        shl__pow2_split(e2x, f);
+        for (int i = 0; i < 6 * nc; ++i) hess[i] = hess[i] * f[0] * f[1];
+    }
 }
 
 int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3], double radius,
@@ -102,9 +128,6 @@ int shl_sphere_hess(const shl_ctx *ctx, const double x[3], const double center[3
     shl__sphere_geom g;
     shl__sphere_geom_init(&g, x, center, radius);
     shl__sphere_sh_d(lmax, &g, coeffs, grad); /* as shl_sphere_grad, bit for bit */
-    double z10[SHL__Z10_SIZE(SHL_LMAX_MAX)];
-    shl__sphere_zh_hess(&g, lmax, z10);
-    double *const out[6] = {hess, hess + nc, hess + 2 * nc, hess + 3 * nc, hess + 4 * nc, hess + 5 * nc};
-    ctx->isa->zh_to_sh_hess6(lmax, z10, out); /* shl__zh_to_sh_hess6 vectorized, bit for bit */
+    shl__sphere_sh_hess(lmax, &g, hess, nc);
     return SHL_OK;
 }

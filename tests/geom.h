@@ -43,4 +43,20 @@ static inline void rotation_matrix(const double axis[3], double t, double m[3][3
     m[2][0] = z * x * C - y * s; m[2][1] = z * y * C + x * s; m[2][2] = c + z * z * C;
 }
 
+/* A sphere seen from far away: sin^2 a = (r/d)^2 below the smallest normal double (r/d from
+ * 2^-512 to 2^-590, d from 2^-480 to 2^-540, so that the gradient ~r^2/d^3 and the Hessian
+ * ~r^2/d^4 are normal numbers); first: the geometry of the fuzz reproducer
+ * fuzz_lights-sphere-sin2-underflow-gradient.  Sets x and the centre c, returns the radius. */
+static inline double tiny_sphere_case(rng_t *rg, int first, double x[3], double c[3])
+{
+    double dir[3];
+    rng_unit_vector(rg, dir);
+    const int ed = -480 - (int)(rng_uniform(rg) * 60), es = 512 + (int)(rng_uniform(rg) * (ed + 1070 - 512));
+    const double d = ldexp(rng_range(rg, 1.0, 2.0), ed), r = ldexp(rng_range(rg, 1.0, 2.0), ed - es);
+    for (int k = 0; k < 3; ++k) c[k] = ldexp(rng_range(rg, -1.0, 1.0), ed), x[k] = c[k] - d * dir[k];
+    if (!first) return r;
+    x[0] = 8.2e-149, x[1] = 8.2e-149, x[2] = -8.4e-149, c[0] = c[1] = c[2] = 0.0;
+    return 3.3e-310;
+}
+
 #endif

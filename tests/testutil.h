@@ -69,4 +69,12 @@ static inline int all_finite(const double *v, int n)
     return 1;
 }
 
+/* |a - ref| / |ref| in the Euclidean (for a matrix: Frobenius) norm over n entries a[i * stride] */
+static inline double rel_norm_err(const double *a, int stride, const long double *ref, int n)
+{
+    long double e = 0.0L, m = 0.0L;
+    for (int i = 0; i < n; ++i) e += (a[i * stride] - ref[i]) * (a[i * stride] - ref[i]), m += ref[i] * ref[i];
+    return (double)sqrtl(e / m);
+}
+
 #endif
