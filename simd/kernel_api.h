@@ -122,10 +122,9 @@ typedef void (*shl__poly_zh_fn)(const struct shl__poly_geom *g, int lmax, double
  * integrals of shl__poly_zh_grad_d reconstructed as by shl__zh_to_sh, results equal to theirs. */
 typedef void (*shl__poly_grad_sh_fn)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc);
 /* Single-call polygon Hessians (simd/poly_hess_batch.h): shl__poly_zh_hess_d and the ten
- * reconstructions of shl__zh_to_sh_multi into out[b] (src/polygon.h) in one call, and
- * shl__zh_to_sh_hess6, vectorized, bit for bit the scalar ones. */
+ * reconstructions of shl__zh_to_sh_multi into out[b] (src/polygon.h) in one call,
+ * vectorized, bit for bit the scalar ones. */
 typedef void (*shl__poly_hess_fn)(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out);
-typedef void (*shl__zh_to_sh_blocks_fn)(int lmax, const double *z10, double *const *out);
 
 /* The kernels of one instruction set; src/dispatch.c builds one per line of
  * simd/isa_list.h. */
@@ -141,7 +140,6 @@ struct shl__isa {
     shl__poly_zh_fn poly_zh;           /* shl_polygon (simd/poly_zh_batch.h) */
     shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
     shl__poly_hess_fn poly_hess;            /* shl_polygon_hess (simd/poly_hess_batch.h) */
-    shl__zh_to_sh_blocks_fn zh_to_sh_hess6; /* shl_sphere_hess's reconstruction */
 };
 
 /* The interpolation reference (src/interp.c, src/interp_kernel.h): the scalar
@@ -164,7 +162,6 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
     void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc); \
-    void shl__poly_hess_##isa(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out); \
-    void shl__zh_to_sh_hess6_##isa(int lmax, const double *z10, double *const *out);
+    void shl__poly_hess_##isa(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out);
 
 #endif

@@ -12,8 +12,7 @@
  * this kernel measured slower on AVX-512 (AMD EPYC, 2026-12-02): a block costs its
  * instructions and spills per edge and band, about the same at any width.  The ZH -> SH
  * reconstruction (Wang 2018 Eq. 33) of the ten blocks (shl__zh_to_sh_multi) follows in
- * the same call, vectorized across orders m, and the sphere's six-block one
- * (shl__zh_to_sh_hess6) across blocks: the same sums in the same order as shl__zh_to_sh. */
+ * the same call, vectorized across orders m: the same sums in the same order as shl__zh_to_sh. */
 #include "../src/polygon_hess.h"
 #include "kernel_api.h"
 #include <string.h>
@@ -253,43 +252,4 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             for (int l = 0; l <= lmax; ++l) z[l * dp + (dir & 1 ? (dir + 1) / 2 : dir ? lmax + dir / 2 : 0)] = area[dir * SHL__ZH_STRIDE + l];
     }
     zh_to_sh_rows(lmax, z, dp, out);
-}
-
-/* shl__zh_to_sh_hess6 (the sphere's Hessian, z10 records of polygon.h), vectorized across
- * the six blocks: the 8-lane vector of a record's last 8 entries, lanes 2 .. 7 the Hessian
- * (generic vectors: any ISA runs them); per lane the sums of shl__zh_to_sh in its order. */
-typedef double r8 __attribute__((vector_size(8 * sizeof(double))));
-
-void SHL_ISA_SUFFIX(shl__zh_to_sh_hess6)(int lmax, const double *z10, double *const *out)
-{
-    enum { LO = SHL__ZH_MULTI - 8 }; /* lane j: record entry LO + j */
-    for (int l = 0; l <= lmax; ++l) {
-        r8 even[SHL_LMAX_MAX + 1], odd[SHL_LMAX_MAX + 1];
-        memcpy(&even[0], z10 + SHL__Z10(lmax, 0, l) + LO, sizeof even[0]);
-        for (int k = 1; k <= l; ++k) { /* even_k = z_{2k-1} + z_{2k}, odd_{k-1} = z_{2k-1} - z_{2k} */
-            r8 z1, z2;
-            memcpy(&z1, z10 + SHL__Z10(lmax, 2 * k - 1, l) + LO, sizeof z1);
-            memcpy(&z2, z10 + SHL__Z10(lmax, 2 * k, l) + LO, sizeof z2);
-            even[k] = z1 + z2, odd[k - 1] = z1 - z2;
-        }
-        const double *we = shl__zh_even_w + SHL__ZH_EVEN_OFS(l), *wo = shl__zh_odd_w + SHL__ZH_ODD_OFS(l);
-        r8 res[2 * SHL_LMAX_MAX + 1]; /* m + l */
-        for (int m = -l; m <= l; ++m) {
-            r8 acc = {0, 0, 0, 0, 0, 0, 0, 0};
-            if (m >= 0)
-                for (int k = 0; k <= l; ++k) {
-                    const double w = we[m * (l + 1) + k];
-                    acc += (r8){w, w, w, w, w, w, w, w} * even[k];
-                }
-            else
-                for (int k = 0; k < l; ++k) {
-                    const double w = wo[(-m - 1) * l + k];
-                    acc += (r8){w, w, w, w, w, w, w, w} * odd[k];
-                }
-            res[m + l] = acc;
-        }
-        /* rows written after the band (gcc -O2 turns per-value stores into a scatter, slow on AMD Zen) */
-        for (int b = 0; b < 6; ++b)
-            for (int m = 0; m <= 2 * l; ++m) out[b][l * l + m] = res[m][4 - LO + b];
-    }
 }

@@ -69,7 +69,6 @@ static const shl__isa isas[] = {
         .poly_zh = shl__poly_zh_##isa,                                                                 \
         .poly_grad_sh = shl__poly_grad_sh_##isa,                                                       \
         .poly_hess = shl__poly_hess_##isa,                                                             \
-        .zh_to_sh_hess6 = shl__zh_to_sh_hess6_##isa,                                                   \
     },
 #include "../simd/isa_list.h"
 #undef SHL_ISA

@@ -90,8 +90,6 @@ void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
 /* shl__zh_to_sh of each of the SHL__ZH_MULTI interleaved blocks of z10 (layout above)
  * into out[b], bit for bit, the blocks side by side (polygon_hess.c). */
 void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI]);
-/* The same for the six Hessian blocks only (b = 4..9) into out[0..5]. */
-void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6]);
 /* Float ZH in, float SH out; accumulates in double. */
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
 

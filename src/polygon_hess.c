@@ -308,11 +308,6 @@ void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_
     zh_to_sh_blocks(lmax, z10, 0, SHL__ZH_MULTI, out);
 }
 
-void shl__zh_to_sh_hess6(int lmax, const double *z10, double *const out[6])
-{
-    zh_to_sh_blocks(lmax, z10, 4, 6, out);
-}
-
 static shl__zh_wt_table wt;
 static pthread_once_t wt_once = PTHREAD_ONCE_INIT;
 
