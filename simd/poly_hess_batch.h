@@ -55,10 +55,9 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
     for (int ax = 0; ax < 3; ++ax) gs[ax] = sum_so_far(first, gs[ax]) + hv_set1(mu[ax]) * ig;
 }
 
-/* Lobe order of the kernel's lanes: position p holds lobe 0 (p = 0), 2p - 1 (1 <= p <= lmax)
- * or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are rows k and
- * lmax + k: their sums and differences are vector operations. */
-static inline int lane_lobe(int lmax, int p) { return p == 0 ? 0 : p <= lmax ? 2 * p - 1 : 2 * (p - lmax); }
+/* Lobe order of the kernel's lanes ("lane order"): position p holds lobe 0 (p = 0), 2p - 1
+ * (1 <= p <= lmax) or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are
+ * rows k and lmax + k: their sums and differences are vector operations. */
 
 enum { NB = SHL__ZH_MULTI, FW = SHL_LMAX_MAX + 1 + ZW }; /* blocks; row length of zh_to_sh_rows' ev, od */
 
@@ -151,7 +150,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
 {
     const int n = g->n, ndir = 2 * lmax + 1, dp = (ndir + ZW - 1) / ZW * ZW;
     /* z[(b (lmax + 1) + l) dp + p]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
-     * of lobe lane_lobe(p), band l; positions ndir .. dp - 1 repeat the last one */
+     * of the lobe at lane position p, band l; positions ndir .. dp - 1 repeat the last one */
     double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1) + ZW];
     for (int k = 0; k < ZW; ++k) z[SHL__ZH_MULTI * (lmax + 1) * dp + k] = 0.0; /* read past the last row (zh_to_sh_rows) */
     const double sc = g->grad_scale[0] * g->grad_scale[1];
@@ -169,8 +168,11 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     /* the lobes' components in lane order, gathered before the blocks (a vector loaded right
      * after its scalar stores would wait for them: no store forwarding) */
     double t[3][SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
-    for (int p = 0; p < dp; ++p)
-        for (int c = 0; c < 3; ++c) t[c][p] = shl__zh_dir[lane_lobe(lmax, p < ndir ? p : ndir - 1)][c];
+    for (int c = 0; c < 3; ++c) { /* lane order, one loop per kind of lane (no branch per lane) */
+        t[c][0] = shl__zh_dir[0][c];
+        for (int k = 1; k <= lmax; ++k) t[c][k] = shl__zh_dir[2 * k - 1][c], t[c][lmax + k] = shl__zh_dir[2 * k][c];
+        for (int p = ndir; p < dp; ++p) t[c][p] = t[c][ndir - 1];
+    }
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
         hv u[3];
@@ -192,7 +194,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
              * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
             const int quad = h->quad;
             hv qe[SHL_LMAX_MAX + 1], qi[SHL_LMAX_MAX + 1], qm[SHL_LMAX_MAX + 1];
-            qi[1] = qm[1] = hv_set1(0.0); /* set below in both branches; gcc cannot see it at lmax 0 */
+            qm[1] = hv_set1(0.0); /* set by the rule at lmax >= 1 (read only then); gcc cannot see it */
             if (quad) {
                 for (int l = 0; l <= lmax; ++l) qe[l] = qi[l] = hv_set1(0.0);
                 for (int j = 0; j < SHL__HESS_NQ; ++j) {
@@ -223,10 +225,10 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             hv i1 = (v * gamma - (fp1 * da - i0 * a)) / hv_set1(2.0);
             hv j1 = i0, j2 = hv_set1(0.0), m2 = hv_set1(0.0), m1 = e0; /* M_0, M_1 = E_0 */
             hv e1 = (v * i0 - ffp1 * da + te0 * a + g2 * (b1 - gamma * a)) / hv_set1(3.0); /* E_1 */
-            if (!quad) /* I_l and c M_l of (H2) from the recurrence */
-                qi[0] = i0, qm[0] = hv_set1(0.0), qi[1] = i1, qm[1] = c * e0;
-            hess_add(h, mu, qi[0], qm[0], hv_set1(1.0), hv_set1(0.0), i0, &sum[0], first);
-            if (lmax >= 1) hess_add(h, mu, qi[1], qm[1], a, da, i1, &sum[1], first);
+            /* I_l and c M_l of (H2): the rule's (quad) or the recurrence's (selected, not stored:
+             * a vector stored and loaded back costs a store-to-load round trip per band) */
+            hess_add(h, mu, quad ? qi[0] : i0, quad ? qm[0] : hv_set1(0.0), hv_set1(1.0), hv_set1(0.0), i0, &sum[0], first);
+            if (lmax >= 1) hess_add(h, mu, quad ? qi[1] : i1, quad ? qm[1] : c * e0, a, da, i1, &sum[1], first);
             for (int l = 2; l <= lmax; ++l) {
                 const hv rl = hv_set1(inv_l[l]), lm1 = hv_set1(l - 1.0), tlm1 = hv_set1(2.0 * l - 1.0);
                 const hv pl = (tlm1 * a * p1 - lm1 * p2) * rl;                                      /* Wang Eq. 11 */
@@ -239,8 +241,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
                 const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
                 const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
                 sum[l].bs = sum_so_far(first, sum[l].bs) + c * bl;
-                if (!quad) qi[l] = il, qm[l] = c * ml;
-                hess_add(h, mu, qi[l], qm[l], pl, dpl, il, &sum[l], first);
+                hess_add(h, mu, quad ? qi[l] : il, quad ? qm[l] : c * ml, pl, dpl, il, &sum[l], first);
                 p2 = p1, p1 = pl, dp2 = dp1, dp1 = dpl;
                 bb2 = bb1, bb1 = bl, d2 = d1, d1 = dl;
                 j2 = j1, j1 = jl, i1 = il;
