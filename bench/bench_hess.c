@@ -1,7 +1,10 @@
 /* Hessian cost (issue 19): shl_polygon_hess / shl_polygon and shl_sphere_hess / shl_sphere,
  * with the gradient calls for reference, at lmax 4, 8, 14, 30, all ratios from one run
- * (one core, double, the context's default ISA, printed; minimum of 31 timed repetitions of ~2 ms each).  The issue's
- * target is shl_polygon_hess <= 2.5x shl_polygon at lmax 8.  Also one light set of
+ * (one core, double, the context's default ISA, printed).  The host is shared and noisy
+ * (run-to-run swings of 1.5x): per lmax, ROUNDS rounds each time every call in turn (the
+ * minimum of BATCHES batches of ~1 ms), a ratio is taken within each round and the table
+ * prints the median over the rounds, and for the triangle's hess/coeffs also its range.
+ * The issue's target is shl_polygon_hess <= 2.5x shl_polygon at lmax 8.  Also one light set of
  * 4 quads and 2 spheres: shl_lights_eval_hess / shl_lights_eval (with gradients).
  * CSV: build/bench/bench_hess.csv (-o overrides); --help. */
 #include "shlight.h"
@@ -44,14 +47,51 @@ RUNNER(run_sphere_hess, shl_sphere_hess(j->ctx, x, j->center, j->radius, cbuf, g
 RUNNER(run_set_grad, shl_lights_eval(j->ctx, j->set, x, cbuf, gbuf))
 RUNNER(run_set_hess, shl_lights_eval_hess(j->ctx, j->set, x, cbuf, gbuf, hbuf))
 
-static double timed(void (*fn)(void *), job *j)
+enum { ROUNDS = 9, BATCHES = 5 };
+
+/* The calls timed, in the order of a round. */
+enum { POLY, POLY_GRAD, POLY_HESS, SPHERE, SPHERE_GRAD, SPHERE_HESS, SET_GRAD, SET_HESS, NCALL };
+static void (*const call_fn[NCALL])(void *) = {run_poly,   run_poly_grad,   run_poly_hess, run_sphere,
+                                               run_sphere_grad, run_sphere_hess, run_set_grad,  run_set_hess};
+
+/* Evaluations of fn in ~1 ms. */
+static long calibrate(void (*fn)(void *), job *j)
 {
     j->inner = 1;
     const double t0 = bench_now();
     long n = 0;
     while (bench_now() - t0 < 0.005) { fn(j); ++n; }
-    j->inner = (long)fmax(1.0, 0.002 * n / (bench_now() - t0));
-    return bench_run(fn, j, j->inner, 31).min; /* short calls, many: the minimum dodges preemption under load */
+    return (long)fmax(1.0, 0.001 * n / (bench_now() - t0));
+}
+
+/* Seconds per evaluation of every call, ROUNDS interleaved rounds: t[call][round]. */
+static void time_rounds(job *j, double t[NCALL][ROUNDS])
+{
+    long inner[NCALL];
+    for (int c = 0; c < NCALL; ++c) inner[c] = calibrate(call_fn[c], j);
+    for (int r = 0; r < ROUNDS; ++r)
+        for (int c = 0; c < NCALL; ++c) {
+            j->inner = inner[c];
+            t[c][r] = bench_run(call_fn[c], j, inner[c], BATCHES).min; /* short calls: the minimum dodges preemption */
+        }
+}
+
+/* Median over the rounds of t[a][r] / t[b][r]; lo, hi (if not NULL): its range. */
+static double ratio_median(double t[NCALL][ROUNDS], int a, int b, double *lo, double *hi)
+{
+    double q[ROUNDS];
+    for (int r = 0; r < ROUNDS; ++r) q[r] = t[a][r] / t[b][r];
+    const double med = bench_median(q, ROUNDS); /* sorts q */
+    if (lo) *lo = q[0], *hi = q[ROUNDS - 1];
+    return med;
+}
+
+/* Median over the rounds of the call's time, in ns. */
+static double ns_median(double t[NCALL][ROUNDS], int c)
+{
+    double q[ROUNDS];
+    for (int r = 0; r < ROUNDS; ++r) q[r] = t[c][r] * 1e9;
+    return bench_median(q, ROUNDS);
 }
 
 int main(int argc, char **argv)
@@ -63,7 +103,8 @@ int main(int argc, char **argv)
         "Cost of the analytic SH Hessians (issue 19), one core, double, the default ISA: shl_polygon_hess against\n"
         "shl_polygon and shl_polygon_grad (triangle), shl_sphere_hess against shl_sphere and shl_sphere_grad,\n"
         "at lmax 4, 8, 14, 30, and a light set (4 quads, 2 spheres) with shl_lights_eval_hess against\n"
-        "shl_lights_eval with gradients.  Ratios within one run.  About 6 s on an idle 2-core machine.\n"
+        "shl_lights_eval with gradients.  Ratios within one run: medians over 9 interleaved rounds (and\n"
+        "the range of the triangle's hess/coeffs).  About 2 s on an idle 2-core machine.\n"
         "Writes a Markdown table to stdout and one CSV row per table row to the CSV file.",
         opts, 1, 0};
     bench_parse(&cli, argc, argv, NULL);
@@ -98,7 +139,9 @@ int main(int argc, char **argv)
     shl_lights_add_sphere(set, c2, 0.2, rgb);
     j.set = set;
 
-    printf("\n## Hessian cost (one core, double, ns per point; minimum of 31 repetitions)\n\n");
+    printf("\n## Hessian cost (one core, double, ns per point; medians of %d interleaved rounds, each the minimum of %d "
+           "batches of ~1 ms; ratios within each round, [range] over the rounds)\n\n",
+           ROUNDS, BATCHES);
     printf("| light | lmax | coeffs ns | grad ns | hess ns | hess/coeffs | hess/grad |\n|---|---|---|---|---|---|---|\n");
     const int lm[4] = {4, 8, 14, 30};
     for (int i = 0; i < 4; ++i) {
@@ -106,17 +149,21 @@ int main(int argc, char **argv)
         shl_ctx_create(lm[i], &ctx);
         j.ctx = ctx;
         bench_progress("lmax %d...", lm[i]);
-        const double tp = timed(run_poly, &j), tpg = timed(run_poly_grad, &j), tph = timed(run_poly_hess, &j);
-        const double ts = timed(run_sphere, &j), tsg = timed(run_sphere_grad, &j), tsh = timed(run_sphere_hess, &j);
-        const double tlg = timed(run_set_grad, &j), tlh = timed(run_set_hess, &j);
-        printf("| triangle | %d | %.0f | %.0f | %.0f | %.2fx | %.2fx |\n", lm[i], tp * 1e9, tpg * 1e9, tph * 1e9, tph / tp,
-               tph / tpg);
-        printf("| sphere | %d | %.0f | %.0f | %.0f | %.1fx | %.1fx |\n", lm[i], ts * 1e9, tsg * 1e9, tsh * 1e9, tsh / ts,
-               tsh / tsg);
-        printf("| set (4 quads, 2 spheres) | %d | | %.0f | %.0f | | %.2fx |\n", lm[i], tlg * 1e9, tlh * 1e9, tlh / tlg);
-        fprintf(csv, "triangle,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], tp * 1e9, tpg * 1e9, tph * 1e9, tph / tp, tph / tpg);
-        fprintf(csv, "sphere,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], ts * 1e9, tsg * 1e9, tsh * 1e9, tsh / ts, tsh / tsg);
-        fprintf(csv, "set,%d,,%.1f,%.1f,,%.3f\n", lm[i], tlg * 1e9, tlh * 1e9, tlh / tlg);
+        static double t[NCALL][ROUNDS];
+        time_rounds(&j, t);
+        double lo, hi;
+        const double rph = ratio_median(t, POLY_HESS, POLY, &lo, &hi), rpg = ratio_median(t, POLY_HESS, POLY_GRAD, NULL, NULL);
+        const double rsh = ratio_median(t, SPHERE_HESS, SPHERE, NULL, NULL), rsg = ratio_median(t, SPHERE_HESS, SPHERE_GRAD, NULL, NULL);
+        const double rlh = ratio_median(t, SET_HESS, SET_GRAD, NULL, NULL);
+        const double tp = ns_median(t, POLY), tpg = ns_median(t, POLY_GRAD), tph = ns_median(t, POLY_HESS);
+        const double ts = ns_median(t, SPHERE), tsg = ns_median(t, SPHERE_GRAD), tsh = ns_median(t, SPHERE_HESS);
+        const double tlg = ns_median(t, SET_GRAD), tlh = ns_median(t, SET_HESS);
+        printf("| triangle | %d | %.0f | %.0f | %.0f | %.2fx [%.2f, %.2f] | %.2fx |\n", lm[i], tp, tpg, tph, rph, lo, hi, rpg);
+        printf("| sphere | %d | %.0f | %.0f | %.0f | %.1fx | %.1fx |\n", lm[i], ts, tsg, tsh, rsh, rsg);
+        printf("| set (4 quads, 2 spheres) | %d | | %.0f | %.0f | | %.2fx |\n", lm[i], tlg, tlh, rlh);
+        fprintf(csv, "triangle,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], tp, tpg, tph, rph, rpg);
+        fprintf(csv, "sphere,%d,%.1f,%.1f,%.1f,%.3f,%.3f\n", lm[i], ts, tsg, tsh, rsh, rsg);
+        fprintf(csv, "set,%d,,%.1f,%.1f,,%.3f\n", lm[i], tlg, tlh, rlh);
         shl_ctx_destroy(ctx);
     }
     bench_loadavg(load, sizeof load);

@@ -27,22 +27,36 @@
 /* u . p per lane: (u0 p0 + u1 p1) + u2 p2, the order of shl__dot3 */
 static inline hv hv_dot(const hv u[3], const double p[3]) { return HV_CAT(hv, _dot)(u[0], u[1], u[2], p); }
 
-/* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums:
- * il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of the gradient. */
+/* A band's sums over the edges: Hessian (H2), gradient (Wu Eq. 11), Wang's B_l (Eq. 30).
+ * The first edge starts them from zero in registers (zeroing them in memory first, gcc
+ * emitted a rep stos per band, ~30 cycles to start on AMD Zen 3: 20% of the call). */
+typedef struct {
+    hv hs[6], gs[3], bs;
+} band_sums;
+
+/* The sum so far: zero at the first edge (0 + x, as the reference's sums from 0). */
+static inline hv sum_so_far(int first, hv s) { return first ? hv_set1(0.0) : s; }
+
+/* The per-edge, per-band terms of (H2) and Wu's gradient (Eq. 11) added to the band's sums
+ * (first: the first edge): il = I_l of (H2), sm = c M_l, p = P_l(a_e), dp = dP_l, ig = I_l of
+ * the gradient. */
 __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge *h, const double mu[3], hv il, hv sm,
-                                                            hv p, hv dp, hv ig, hv *hs, hv *gs)
+                                                            hv p, hv dp, hv ig, band_sums *sb, int first)
 {
+    hv *hs = sb->hs, *gs = sb->gs;
     const hv al = hv_set1(h->dff2) * p + hv_set1(h->ff2) * dp, bl = hv_set1(h->fe2) * p; /* (H6) */
     const hv qw = il * hv_set1(2.0 * h->gw) - bl * hv_set1(h->dlw);
     const hv ql = il * hv_set1(2.0 * h->gl) - al - bl * hv_set1(h->dll);
-    for (int i = 0; i < 6; ++i) hs[i] += qw * hv_set1(h->tw[i]) + ql * hv_set1(h->tl[i]) - sm * hv_set1(h->tm[i]);
-    for (int ax = 0; ax < 3; ++ax) gs[ax] += hv_set1(mu[ax]) * ig;
+#pragma GCC unroll 6
+    for (int i = 0; i < 6; ++i)
+        hs[i] = sum_so_far(first, hs[i]) + (qw * hv_set1(h->tw[i]) + ql * hv_set1(h->tl[i]) - sm * hv_set1(h->tm[i]));
+#pragma GCC unroll 3
+    for (int ax = 0; ax < 3; ++ax) gs[ax] = sum_so_far(first, gs[ax]) + hv_set1(mu[ax]) * ig;
 }
 
-/* Lobe order of the kernel's lanes: position p holds lobe 0 (p = 0), 2p - 1 (1 <= p <= lmax)
- * or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are rows k and
- * lmax + k: their sums and differences are vector operations. */
-static inline int lane_lobe(int lmax, int p) { return p == 0 ? 0 : p <= lmax ? 2 * p - 1 : 2 * (p - lmax); }
+/* Lobe order of the kernel's lanes ("lane order"): position p holds lobe 0 (p = 0), 2p - 1
+ * (1 <= p <= lmax) or 2 (p - lmax) (p > lmax), so that the pairs (2k - 1, 2k) of Eq. 33 are
+ * rows k and lmax + k: their sums and differences are vector operations. */
 
 enum { NB = SHL__ZH_MULTI, FW = SHL_LMAX_MAX + 1 + ZW }; /* blocks; row length of zh_to_sh_rows' ev, od */
 
@@ -135,7 +149,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
 {
     const int n = g->n, ndir = 2 * lmax + 1, dp = (ndir + ZW - 1) / ZW * ZW;
     /* z[(b (lmax + 1) + l) dp + p]: block b (value, gradient, Hessian as the blocks of z10, polygon.h)
-     * of lobe lane_lobe(p), band l; positions ndir .. dp - 1 repeat the last one */
+     * of the lobe at lane position p, band l; positions ndir .. dp - 1 repeat the last one */
     double z[SHL__ZH_MULTI * (SHL_LMAX_MAX + 1) * SHL__WT_PAD(2 * SHL_LMAX_MAX + 1) + ZW];
     for (int k = 0; k < ZW; ++k) z[SHL__ZH_MULTI * (lmax + 1) * dp + k] = 0.0; /* read past the last row (zh_to_sh_rows) */
     const double sc = g->grad_scale[0] * g->grad_scale[1];
@@ -153,20 +167,20 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     /* the lobes' components in lane order, gathered before the blocks (a vector loaded right
      * after its scalar stores would wait for them: no store forwarding) */
     double t[3][SHL__WT_PAD(2 * SHL_LMAX_MAX + 1)];
-    for (int p = 0; p < dp; ++p)
-        for (int c = 0; c < 3; ++c) t[c][p] = shl__zh_dir[lane_lobe(lmax, p < ndir ? p : ndir - 1)][c];
+    for (int c = 0; c < 3; ++c) { /* lane order, one loop per kind of lane (no branch per lane) */
+        t[c][0] = shl__zh_dir[0][c];
+        for (int k = 1; k <= lmax; ++k) t[c][k] = shl__zh_dir[2 * k - 1][c], t[c][lmax + k] = shl__zh_dir[2 * k][c];
+        for (int p = ndir; p < dp; ++p) t[c][p] = t[c][ndir - 1];
+    }
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += ZW) {
         hv u[3];
         for (int c = 0; c < 3; ++c) memcpy(&u[c], t[c] + d0, sizeof u[c]);
-        hv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[SHL_LMAX_MAX + 1][3], hsum[SHL_LMAX_MAX + 1][6];
-        for (int l = 0; l <= lmax; ++l) {
-            bsum[l] = hv_set1(0.0);
-            for (int a = 0; a < 3; ++a) gsum[l][a] = hv_set1(0.0);
-            for (int i = 0; i < 6; ++i) hsum[l][i] = hv_set1(0.0);
-        }
+        band_sums sum[SHL_LMAX_MAX + 1];
+        hv surf[SHL_LMAX_MAX + 1];
+        if (n == 0) memset(sum, 0, (lmax + 1) * sizeof sum[0]); /* no edges: the sums are zero */
         for (int e = 0; e < n; ++e) {
-            const int f = (e + 1 == n) ? 0 : e + 1;
+            const int f = (e + 1 == n) ? 0 : e + 1, first = e == 0;
             const shl__hess_edge *h = &he[e];
             const double *mu = g->mu[e];
             const hv gamma = hv_set1(g->gamma[e]), i0 = hv_set1(g->f_integral[e]), fp1 = hv_set1(g->fprime1[e]);
@@ -179,7 +193,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
              * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
             const int quad = h->quad;
             hv qe[SHL_LMAX_MAX + 1], qi[SHL_LMAX_MAX + 1], qm[SHL_LMAX_MAX + 1];
-            qi[1] = qm[1] = hv_set1(0.0); /* set below in both branches; gcc cannot see it at lmax 0 */
+            qm[1] = hv_set1(0.0); /* set by the rule at lmax >= 1 (read only then); gcc cannot see it */
             if (quad) {
                 for (int l = 0; l <= lmax; ++l) qe[l] = qi[l] = hv_set1(0.0);
                 for (int j = 0; j < SHL__HESS_NQ; ++j) {
@@ -204,16 +218,16 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             }
             hv p1 = a, p2 = hv_set1(1.0), dp1 = da, dp2 = hv_set1(0.0);
             hv bb1 = b1, bb2 = gamma, d1 = gamma, d2 = hv_set1(0.0);
-            bsum[0] += c * gamma;
-            if (lmax >= 2) bsum[1] += c * b1;
+            sum[0].bs = sum_so_far(first, sum[0].bs) + c * gamma;
+            if (lmax >= 2) sum[1].bs = sum_so_far(first, sum[1].bs) + c * b1;
             /* l = 0 and 1 of Wu's I, J and of (H3)-(H4) */
             hv i1 = (v * gamma - (fp1 * da - i0 * a)) / hv_set1(2.0);
             hv j1 = i0, j2 = hv_set1(0.0), m2 = hv_set1(0.0), m1 = e0; /* M_0, M_1 = E_0 */
             hv e1 = (v * i0 - ffp1 * da + te0 * a + g2 * (b1 - gamma * a)) / hv_set1(3.0); /* E_1 */
-            if (!quad) /* I_l and c M_l of (H2) from the recurrence */
-                qi[0] = i0, qm[0] = hv_set1(0.0), qi[1] = i1, qm[1] = c * e0;
-            hess_add(h, mu, qi[0], qm[0], hv_set1(1.0), hv_set1(0.0), i0, hsum[0], gsum[0]);
-            if (lmax >= 1) hess_add(h, mu, qi[1], qm[1], a, da, i1, hsum[1], gsum[1]);
+            /* I_l and c M_l of (H2): the rule's (quad) or the recurrence's (selected, not stored:
+             * a vector stored and loaded back costs a store-to-load round trip per band) */
+            hess_add(h, mu, quad ? qi[0] : i0, quad ? qm[0] : hv_set1(0.0), hv_set1(1.0), hv_set1(0.0), i0, &sum[0], first);
+            if (lmax >= 1) hess_add(h, mu, quad ? qi[1] : i1, quad ? qm[1] : c * e0, a, da, i1, &sum[1], first);
             for (int l = 2; l <= lmax; ++l) {
                 const hv rl = hv_set1(inv_l[l]), lm1 = hv_set1(l - 1.0), tlm1 = hv_set1(2.0 * l - 1.0);
                 const hv pl = (tlm1 * a * p1 - lm1 * p2) * rl;                                      /* Wang Eq. 11 */
@@ -225,9 +239,8 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
                 const hv bl = (tlm1 * cl - lm1 * bb2) * rl;                                         /* Eq. 30 */
                 const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
                 const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
-                bsum[l] += c * bl;
-                if (!quad) qi[l] = il, qm[l] = c * ml;
-                hess_add(h, mu, qi[l], qm[l], pl, dpl, il, hsum[l], gsum[l]);
+                sum[l].bs = sum_so_far(first, sum[l].bs) + c * bl;
+                hess_add(h, mu, quad ? qi[l] : il, quad ? qm[l] : c * ml, pl, dpl, il, &sum[l], first);
                 p2 = p1, p1 = pl, dp2 = dp1, dp1 = dpl;
                 bb2 = bb1, bb1 = bl, d2 = d1, d1 = dl;
                 j2 = j1, j1 = jl, i1 = il;
@@ -235,14 +248,24 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             }
         }
         surf[0] = hv_set1(g->solid_angle);                 /* S_0 */
-        if (lmax >= 1) surf[1] = bsum[0] / hv_set1(2.0); /* S_1, Wang Eq. 25 */
-        for (int l = 2; l <= lmax; ++l) surf[l] = hv_set1(s_b[l]) * bsum[l - 1] + hv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
+        if (lmax >= 1) surf[1] = sum[0].bs / hv_set1(2.0); /* S_1, Wang Eq. 25 */
+        for (int l = 2; l <= lmax; ++l) surf[l] = hv_set1(s_b[l]) * sum[l - 1].bs + hv_set1(s_s[l]) * surf[l - 2]; /* Eq. 29 */
+        /* each product stored straight from its register (through an array of them, gcc copied
+         * it in 16-byte halves: the upper half waits, no store forwarding, 7% of the call) */
         for (int l = 0; l <= lmax; ++l) {
-            hv o[SHL__ZH_MULTI];
-            o[0] = hv_set1(norm[l]) * surf[l]; /* Wang Eq. 13 */
-            for (int ax = 0; ax < 3; ++ax) o[1 + ax] = hv_set1(gnorm[l]) * gsum[l][ax];
-            for (int i = 0; i < 6; ++i) o[4 + i] = hv_set1(hnorm[l]) * hsum[l][i]; /* (H2) */
-            for (int bl = 0; bl < SHL__ZH_MULTI; ++bl) memcpy(z + (bl * (lmax + 1) + l) * dp + d0, &o[bl], sizeof o[bl]);
+            double *zl = z + l * dp + d0; /* block b at zl + b (lmax + 1) dp */
+            const hv o = hv_set1(norm[l]) * surf[l]; /* Wang Eq. 13 */
+            memcpy(zl, &o, sizeof o);
+#pragma GCC unroll 3
+            for (int ax = 0; ax < 3; ++ax) {
+                const hv go = hv_set1(gnorm[l]) * sum[l].gs[ax];
+                memcpy(zl + (1 + ax) * (lmax + 1) * dp, &go, sizeof go);
+            }
+#pragma GCC unroll 6
+            for (int i = 0; i < 6; ++i) {
+                const hv ho = hv_set1(hnorm[l]) * sum[l].hs[i]; /* (H2) */
+                memcpy(zl + (4 + i) * (lmax + 1) * dp, &ho, sizeof ho);
+            }
         }
     }
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as shl__poly_zh_grad_d */
