@@ -632,7 +632,8 @@ static int same_grids(const shl_agrid *g, const shl_agrid *h, const probe *p)
  * others alone.  (4) The weights steer the refinement: receivers in the whole box,
  * weight 1 in x < 0 and 1e-3 in x > 0 (where the light is): the weighted mean error at
  * the receivers is below that of the unweighted fill with the same budget (strict, the
- * ratio noted).  Bad weights (< 0, non-finite, all 0): the call fails, nothing changes. */
+ * ratio noted).  Bad weights (< 0, non-finite, all 0) and failed allocations: the call
+ * fails, nothing changes. */
 SHL_TEST(agrid_weighted_receivers)
 {
     enum { NP = 1500 };
@@ -646,6 +647,14 @@ SHL_TEST(agrid_weighted_receivers)
         shl_agrid *g;
         CHECK(shl_agrid_create(f.ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1.0, 1000, &g) == SHL_OK);
         for (int k = 0; k < 3; ++k) CHECK(shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, bad[k]) == want[k] && g->recv == NULL);
+        const double good[2] = {1.0, 3.0};
+        for (long k = 0; k < 2; ++k) { /* the receivers' copy, then their prefix sums, failing */
+            shl__alloc_fail_after = k;
+            const int oom = shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, good);
+            shl__alloc_fail_after = -1;
+            CHECK(oom == SHL_ENOMEM && g->recv == NULL && g->recv_cum == NULL);
+        }
+        CHECK(shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, good) == SHL_OK && g->nrecv == 2 && g->recv_cum[2] == 4.0);
         shl_agrid_destroy(g);
     }
     const double tol = 1e-9 * f.norm;
