@@ -21,8 +21,9 @@
  * note when absent), per-vertex analytic float SIMD at the visible vertices as the
  * reference, uniform grids and adaptive grids (SHL_AGRID_MEAN: coarse 4^3 and 8^3 at
  * tolerances, 4^3 at budgets; each without receivers, kinds mean and budget, and with every
- * mesh vertex a receiver, shl_agrid_set_receivers, kinds mean-recv and budget-recv, its cost
- * timed with the fill's) lighting every vertex; rel. MAE of the image
+ * mesh vertex a receiver, shl_agrid_set_receivers, kinds mean-recv and budget-recv, and with
+ * them weighted by the pixels they cover, shl_agrid_set_weighted_receivers, kinds mean-wrecv and
+ * budget-wrecv, its cost timed with the fill's) lighting every vertex; rel. MAE of the image
  * (bench/common/image.h) against the reference; fill times from fills of the same grids
  * outside the frame.  Writes DIR/bench_agrid_image.csv:
  * scene,kind,res,tol,budget,nodes,samples,fill_s,cpu_s,rel_mae.
@@ -321,7 +322,8 @@ static void image_row(FILE *f, prt *pr, const lighting_method *m, const float *r
     *fill = INFINITY;
     for (int k = 0; k < reps; ++k) {
         const double t0 = bench_now(), c0 = cpu_now();
-        if (ag) must(shl_agrid_set_receivers(ag, m->agrid_receivers ? m->agrid_nreceivers : 0, m->agrid_receivers),
+        if (ag) must(shl_agrid_set_weighted_receivers(ag, m->agrid_receivers ? m->agrid_nreceivers : 0, m->agrid_receivers,
+                                                      m->agrid_receiver_weights),
                      "receivers"); /* timed with the fill: for a static mesh a one-off cost */
         must(ag ? shl_agrid_fill(ag, l, pr->nthreads) : shl_grid_fill(ug, l, pr->nthreads), "fill");
         *fill = fmin(*fill, bench_now() - t0);
@@ -364,6 +366,14 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
         fprintf(stderr, "bench_agrid: precomputation failed\n");
         exit(1);
     }
+    /* image weights of the receivers: the image is linear in the vertex radiances, pixel q showing
+     * triangle t getting sum_k bary_k(q) v(t_k), so its mean absolute error weighs vertex v's error
+     * by the sum of v's barycentric weights over the pixels (shl_agrid_set_weighted_receivers) */
+    double *pixel_weight = calloc((size_t)s.geom.nv, sizeof(double));
+    if (!pixel_weight) exit(1);
+    for (size_t q = 0; q < (size_t)pr.fb.w * (size_t)pr.fb.h; ++q)
+        if (pr.fb.mesh[q] == 0)
+            for (int k = 0; k < 3; ++k) pixel_weight[s.geom.tri[3 * (size_t)pr.fb.tri[q] + k]] += pr.fb.bary[3 * q + k];
     const size_t len = 3 * (size_t)s.width * (size_t)s.height;
     float *ref = xmalloc(sizeof(float) * len), *img = xmalloc(sizeof(float) * len);
     int *idx = xmalloc(sizeof(int) * (size_t)s.geom.nv);
@@ -407,10 +417,14 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
     const int nrel = sizeof rels[0] / sizeof rels[0][0], nb = sizeof budgets / sizeof budgets[0];
     m.kind = LM_AGRID;
     m.agrid_criterion = SHL_AGRID_MEAN;
-    for (int rv = recv_only; rv < 2; ++rv) {
-        const double *rel = rels[rv]; /* without, then with the mesh vertices as receivers (shl_agrid_set_receivers) */
+    static const char *kinds[3][2] = {{"mean", "budget"}, {"mean-recv", "budget-recv"}, {"mean-wrecv", "budget-wrecv"}};
+    for (int rv = recv_only; rv < 3; ++rv) {
+        /* without receivers, with the mesh vertices as receivers (shl_agrid_set_receivers), and with
+         * them weighted by the pixels they cover (shl_agrid_set_weighted_receivers) */
+        const double *rel = rels[rv > 0];
         m.agrid_receivers = rv ? s.geom.pos : NULL;
         m.agrid_nreceivers = rv ? s.geom.nv : 0;
+        m.agrid_receiver_weights = rv == 2 ? pixel_weight : NULL;
         long best_nodes = -1;
         double best_fill = INFINITY, best_cpu = INFINITY;
         for (int k = 0; k < 2 * nrel + nb; ++k) { /* coarse 4^3 and 8^3 at each tolerance; budgets at 4^3 */
@@ -418,7 +432,7 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
             const double trel = k < 2 * nrel ? rel[k % nrel] : 1e-12; /* budgets: a tolerance no cell meets */
             m.agrid_tol = trel * p.mean_ref;
             m.agrid_budget = k < 2 * nrel ? 32L * 32 * 32 : budgets[k - 2 * nrel];
-            const char *kind = k < 2 * nrel ? (rv ? "mean-recv" : "mean") : rv ? "budget-recv" : "budget";
+            const char *kind = kinds[rv][k >= 2 * nrel];
             image_row(f, &pr, &m, ref, exposure, img, reps, kind, trel, &mae, &fill, &cpu, &nodes);
             if (mae <= u32_mae) {
                 if (best_nodes < 0 || nodes < best_nodes) best_nodes = nodes;
@@ -426,7 +440,7 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
                 best_cpu = fmin(best_cpu, cpu);
             }
         }
-        const char *what = rv ? "with receivers" : "without receivers";
+        const char *what = rv == 2 ? "with pixel-weighted receivers" : rv ? "with receivers" : "without receivers";
         if (best_nodes < 0)
             printf("  %s: image rel. MAE <= uniform 32^3's (%.3e): no adaptive run\n", what, u32_mae);
         else
@@ -442,6 +456,7 @@ static void run_image(FILE *f, const char *file, const char *meshes, int quick, 
     free(ref);
     free(img);
     free(idx);
+    free(pixel_weight);
     prt_free(&pr);
     scene_free(&s);
 }

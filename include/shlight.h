@@ -442,11 +442,28 @@ int shl_agrid_get_stats(const shl_agrid *grid, shl_agrid_stats *stats);
  * fixed points (the error where the grid is used, not off the surfaces).  A
  * receiver belongs to the half-open cells containing it, points outside the box
  * to those their clamped position falls in (as shl_agrid_interp clamps); the grid
- * keeps a copy (a key and the float point, 24 bytes per receiver, in stats.bytes).  Errors
+ * keeps a copy (a key, the float point and its weight, and a prefix sum: 32 bytes per
+ * receiver, in stats.bytes).  Errors
  * leave the grid unchanged: SHL_ENULL (grid, or pts with npts > 0), SHL_EDOMAIN
  * (npts < 0), SHL_ENONFINITE, SHL_ENOMEM.
  */
 int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts);
+/**
+ * shl_agrid_set_receivers with a weight >= 0 per receiver (weights[p], NULL: all 1,
+ * which is shl_agrid_set_receivers bit for bit): a cell's weight is the share of the
+ * receivers' total weight it holds (the priority p = e W_cell / W, the SHL_AGRID_MEAN
+ * criterion e W_cell / W: its share of the weighted mean error), and the estimate's
+ * two samples are the cell's receivers at 1/4 and 3/4 of its cumulative weight (in
+ * the same Morton order).  For an image's mean absolute error, the weight of a mesh
+ * vertex is the sum over the pixels showing it of its barycentric weight there (the
+ * image is linear in the vertex values with those weights).  Receivers of weight 0
+ * are dropped (a cell holding only those is never refined); weights are stored as
+ * float (32 bytes per receiver kept, with a double prefix sum, in stats.bytes).
+ * Errors leave the grid unchanged: those of shl_agrid_set_receivers, and a
+ * non-finite weight (SHL_ENONFINITE), a weight < 0 or > 2^100, or npts > 0 with
+ * every weight 0 (SHL_EDOMAIN).
+ */
+int shl_agrid_set_weighted_receivers(shl_agrid *grid, int npts, const double *pts, const double *weights);
 
 /* ---- spherical lights (Mezieres et al. 2022, "HVL", Sec. 4.2) ---------- */
 /**

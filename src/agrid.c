@@ -316,7 +316,9 @@ static int by_key(const void *pa, const void *pb)
 {
     const keyed *a = pa, *b = pb;
     if (a->key != b->key) return (a->key > b->key) - (a->key < b->key);
-    return memcmp(a->x, b->x, sizeof a->x); /* a total order: the result does not depend on qsort */
+    const int x = memcmp(a->x, b->x, sizeof a->x);
+    if (x) return x;
+    return (a->w > b->w) - (a->w < b->w); /* a total order: the result does not depend on qsort */
 }
 
 /* Receivers with key < k. */
@@ -331,40 +333,83 @@ static size_t below(const shl_agrid *g, uint64_t k)
     return lo;
 }
 
-/* The weight of cell c of level l in the refinement priority: the fraction of the
- * receivers it holds, or without receivers its volume in coarse-cell units 8^-l. */
+/* The receivers' weight in cells key k.. below key k2 (Morton keys of finest-level cells). */
+static double weight_between(const shl_agrid *g, uint64_t k, uint64_t k2)
+{
+    return g->recv_cum[below(g, k2)] - g->recv_cum[below(g, k)];
+}
+
+/* The weight of cell c of level l in the refinement priority: the share of the
+ * receivers' weight it holds, or without receivers its volume in coarse-cell units 8^-l. */
 static double cell_weight(const shl_agrid *g, int l, const int c[3])
 {
     if (!g->recv) return ldexp(1.0, -3 * l);
     const int s = 3 * (g->max_levels - 1 - l);
     const uint64_t k = morton(c);
-    return (double)(below(g, (k + 1) << s) - below(g, k << s)) / (double)g->nrecv;
+    return weight_between(g, k << s, (k + 1) << s) / g->recv_cum[g->nrecv];
+}
+
+/* The receiver of b0..b1-1 (their weight > 0) at the fraction q of their cumulative
+ * weight: the first j with recv_cum[j + 1] > recv_cum[b0] + q (recv_cum[b1] - recv_cum[b0]).
+ * With unit weights that is b0 + floor(q (b1 - b0)). */
+static size_t receiver_at(const shl_agrid *g, size_t b0, size_t b1, double q)
+{
+    const double t = g->recv_cum[b0] + q * (g->recv_cum[b1] - g->recv_cum[b0]);
+    size_t lo = b0, hi = b1 - 1; /* the answer is in lo..hi (hi: t rounded up to recv_cum[b1]) */
+    while (lo < hi) {
+        const size_t m = lo + (hi - lo) / 2;
+        if (g->recv_cum[m + 1] > t) hi = m;
+        else lo = m + 1;
+    }
+    return lo;
 }
 
 int shl_agrid_set_receivers(shl_agrid *grid, int npts, const double *pts)
 {
+    return shl_agrid_set_weighted_receivers(grid, npts, pts, NULL);
+}
+
+int shl_agrid_set_weighted_receivers(shl_agrid *grid, int npts, const double *pts, const double *weights)
+{
     if (!grid || (npts > 0 && !pts)) return SHL_ENULL;
     if (npts < 0) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
-    keyed *k = NULL;
-    if (npts > 0 && !(k = shl__malloc((size_t)npts * sizeof *k))) return SHL_ENOMEM;
-    const int top = grid->max_levels - 1;
+    int kept = 0; /* receivers of weight > 0 */
     for (int p = 0; p < npts; ++p) {
+        if (shl__check_finite(pts + 3 * (size_t)p, 3) || (weights && !isfinite(weights[p]))) return SHL_ENONFINITE;
+        if (weights && (weights[p] < 0.0 || weights[p] > 0x1p100)) return SHL_EDOMAIN;
+        kept += !weights || weights[p] > 0.0;
+    }
+    if (npts > 0 && kept == 0) return SHL_EDOMAIN;
+    keyed *k = NULL;
+    double *cum = NULL;
+    if (kept > 0 && (!(k = shl__malloc((size_t)kept * sizeof *k)) || !(cum = shl__malloc(((size_t)kept + 1) * sizeof *cum)))) {
+        shl__free(k);
+        return SHL_ENOMEM;
+    }
+    const int top = grid->max_levels - 1;
+    for (int p = 0, q = 0; p < npts; ++p) {
+        if (weights && !(weights[p] > 0.0)) continue;
         int c[3];
         for (int a = 0; a < 3; ++a) { /* the finest level's cell, clamped to the box as shl_agrid_interp clamps */
             const int n = (grid->res[a] - 1) << top;
             const double t = floor((pts[3 * p + a] - grid->lo[a]) / (grid->hi[a] - grid->lo[a]) * n);
             c[a] = t < 0.0 ? 0 : t >= n ? n - 1 : (int)t;
             const double x = fmin(fmax(pts[3 * p + a], grid->lo[a]), grid->hi[a]);
-            k[p].x[a] = (float)x;
+            k[q].x[a] = (float)x;
         }
-        k[p].key = morton(c);
+        k[q].key = morton(c);
+        k[q++].w = weights ? weights[p] : 1.0;
     }
-    if (npts > 0) qsort(k, (size_t)npts, sizeof *k, by_key);
+    if (kept > 0) {
+        qsort(k, (size_t)kept, sizeof *k, by_key);
+        cum[0] = 0.0;
+        for (int p = 0; p < kept; ++p) cum[p + 1] = cum[p] + k[p].w; /* sums in the sorted order: exact for unit weights */
+    }
     shl__free(grid->recv);
+    shl__free(grid->recv_cum);
     grid->recv = k;
-    grid->nrecv = (size_t)npts;
+    grid->recv_cum = cum;
+    grid->nrecv = (size_t)kept;
     return SHL_OK;
 }
 
@@ -441,15 +486,15 @@ static void estimate_range(void *arg, int worker, long begin, long end)
             const shl__alevel *L = job->lev + r->level;
             int c[3];
             unkey(L->cell_key[r->cell], c);
-            size_t b0 = 0, b1 = 0;
-            if (g->recv) {
+            size_t at[SAMPLES] = {0, 0};
+            if (g->recv) { /* the cell's receivers at 1/4 and 3/4 of their weight, in Morton order */
                 const int sh = 3 * (g->max_levels - 1 - r->level);
-                b0 = below(g, morton(c) << sh);
-                b1 = below(g, (morton(c) + 1) << sh);
+                const size_t b0 = below(g, morton(c) << sh), b1 = below(g, (morton(c) + 1) << sh);
+                for (int q = 0; q < SAMPLES; ++q) at[q] = receiver_at(g, b0, b1, q ? 0.75 : 0.25);
             }
             for (int q = 0; q < SAMPLES; ++q)
-                for (int k = 0; k < 3; ++k) /* with receivers, the ones at 1/4 and 3/4 of the cell's (Morton) list */
-                    pts[3 * (SAMPLES * j + q) + k] = g->recv ? g->recv[b0 + (b1 - b0) * (q ? 3 : 1) / 4].x[k]
+                for (int k = 0; k < 3; ++k)
+                    pts[3 * (SAMPLES * j + q) + k] = g->recv ? g->recv[at[q]].x[k]
                                                            : (float)(g->lo[k] + (c[k] + (q ? 0.75 : 0.25)) * L->h[k]);
         }
         shl__lights_batch_f_block(&job->ctx, job->lights, SAMPLES * mc, pts, rgb, nv, NULL, 0,
@@ -581,7 +626,7 @@ static void fill_stats(const shl_agrid *g, const shl__alevel *lev, int nl, shl_a
         st->cells += (long)lev[l].ncells;
         bytes += level_bytes(lev + l, g->node_len);
     }
-    st->bytes = (long long)(bytes + g->nrecv * sizeof(struct shl__arecv));
+    st->bytes = (long long)(bytes + g->nrecv * (sizeof(struct shl__arecv) + sizeof(double)) + (g->recv ? sizeof(double) : 0));
 }
 
 /* Room for n more entries in the growable array *p (size *cap, used elements used). */
@@ -802,6 +847,7 @@ void shl_agrid_destroy(shl_agrid *grid)
     if (!grid) return;
     free_levels(grid->lev, grid->nlevels);
     shl__free(grid->recv);
+    shl__free(grid->recv_cum);
     shl__free(grid);
 }
 

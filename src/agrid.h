@@ -42,6 +42,7 @@ typedef struct {
 struct shl__arecv {
     uint64_t key;
     float x[3];
+    float w; /* its weight (> 0; 1 without weights) */
 };
 
 struct shl_agrid {
@@ -57,6 +58,7 @@ struct shl_agrid {
     shl_agrid_stats stats;
     struct shl__arecv *recv; /* shl_agrid_set_receivers: Morton keys of the receivers' cells on level
                               max_levels - 1 and the receivers (float, clamped to the box), ascending (NULL: none) */
+    double *recv_cum;        /* nrecv + 1 prefix sums of the receivers' weights, in recv's order */
     size_t nrecv;
 };
 

@@ -2,7 +2,7 @@
  * written, handles NULL), accuracy against shl_lights_eval (double) at independent
  * random points, C0 continuity across level boundaries, the node budget, thread
  * independence, a light inside the box refined around instead of blurred, and
- * budget-driven (best-first) fills. */
+ * budget-driven (best-first) fills, receivers and weighted receivers. */
 #include "harness.h"
 #include "agrid.h"    /* shl__alevel: the refined cells */
 #include "internal.h" /* shl__alloc_fail_after, shl__thread_fail_after */
@@ -56,6 +56,81 @@ static shl_ctx *ctx_new(void)
     shl_ctx *ctx = NULL;
     CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
     return ctx;
+}
+
+/* An adaptive grid on the coarse 4^3 lattice of the test box with nrecv receivers
+ * recv (weights w, NULL: unweighted; none if nrecv = 0), filled (2 threads), its stats in *st. */
+static shl_agrid *filled_for(const shl_ctx *ctx, const shl_lights *l, int criterion, double tol, long budget, int nrecv,
+                             const double *recv, const double *w, shl_agrid_stats *st)
+{
+    const int r4[3] = {4, 4, 4};
+    shl_agrid *g = NULL;
+    CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, criterion, tol, budget, &g) == SHL_OK);
+    CHECK(shl_agrid_set_weighted_receivers(g, nrecv, recv, w) == SHL_OK);
+    CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
+    CHECK(shl_agrid_get_stats(g, st) == SHL_OK);
+    return g;
+}
+
+static shl_agrid *filled(const shl_ctx *ctx, const shl_lights *l, int criterion, double tol, long budget,
+                         shl_agrid_stats *st)
+{
+    return filled_for(ctx, l, criterion, tol, budget, 0, NULL, NULL, st);
+}
+
+/* n points: positions, the exact values there and room for an interpolant's values. */
+typedef struct {
+    int n;
+    double *pts, *ref, *out;
+} probe;
+
+static probe probe_new(int n)
+{
+    probe p = {n, malloc(sizeof(double) * 3 * (size_t)n), malloc(sizeof(double) * NV * (size_t)n),
+               malloc(sizeof(double) * NV * (size_t)n)};
+    CHECK(p.pts && p.ref && p.out);
+    return p;
+}
+
+static void probe_free(probe *p)
+{
+    free(p->pts);
+    free(p->ref);
+    free(p->out);
+}
+
+/* Mean over the probe's points of the error of values a (err_norm). */
+static double mean_err(const probe *p, const double *a)
+{
+    double m = 0.0;
+    for (int i = 0; i < p->n; ++i) m += err_norm(a + (size_t)i * NV, p->ref + (size_t)i * NV) / p->n;
+    return m;
+}
+
+/* Mean error at the probe's points of the adaptive grid g. */
+static double agrid_mean_err(const shl_agrid *g, probe *p)
+{
+    CHECK(shl_agrid_interp(g, p->n, p->pts, p->out, 2) == SHL_OK);
+    return mean_err(p, p->out);
+}
+
+/* Mean error at the probe's points of the uniform Hermite grid (float nodes) with
+ * the fewest nodes res^3 >= nodes; its res into *res. */
+static double uniform_mean_err(const shl_ctx *ctx, const shl_lights *l, long nodes, const probe *p, int *res)
+{
+    *res = 4;
+    while ((long)*res * *res * *res < nodes) ++*res;
+    const int ru[3] = {*res, *res, *res};
+    shl_grid *u;
+    double *b = malloc(sizeof(double) * NV * (size_t)p->n);
+    CHECK(b != NULL);
+    CHECK(shl_grid_create(ctx, box_lo, box_hi, ru, SHL_GRID_FLOAT, &u) == SHL_OK);
+    CHECK(shl_grid_fill(u, l, 2) == SHL_OK);
+    CHECK(shl_grid_interp(u, SHL_INTERP_HERMITE, 0.0, p->n, p->pts, b, 2) == SHL_OK);
+    const double e = mean_err(p, b);
+    free(b);
+    shl_grid_destroy(u);
+    return e;
 }
 
 SHL_TEST(agrid_bad_input)
@@ -218,17 +293,47 @@ SHL_TEST(agrid_threads_and_budget)
     shl_ctx_destroy(ctx);
 }
 
-/* np random points in [-1, 1]^3 (rng seed) and the set's exact values there
- * (shl_lights_eval_batch, double); returns the largest norm of a value. */
-static double reference_points(const shl_ctx *ctx, const shl_lights *l, int np, unsigned seed, double *pts, double *ref)
+/* The probe's exact values (shl_lights_eval_batch, double); returns the largest norm of one. */
+static double reference_values(const shl_ctx *ctx, const shl_lights *l, probe *p)
 {
-    rng_t r = {seed};
-    for (int i = 0; i < 3 * np; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
-    CHECK(shl_lights_eval_batch(ctx, l, np, pts, ref, NULL) == SHL_OK);
+    CHECK(shl_lights_eval_batch(ctx, l, p->n, p->pts, p->ref, NULL) == SHL_OK);
     double norm = 0.0;
     const double zero[NV] = {0};
-    for (int p = 0; p < np; ++p) norm = fmax(norm, err_norm(ref + (size_t)p * NV, zero));
+    for (int i = 0; i < p->n; ++i) norm = fmax(norm, err_norm(p->ref + (size_t)i * NV, zero));
     return norm;
+}
+
+/* A probe of np random points in [-1, 1]^3 (rng seed) with the set's exact values;
+ * the largest norm of a value into *norm. */
+static probe reference_points(const shl_ctx *ctx, const shl_lights *l, int np, unsigned seed, double *norm)
+{
+    probe p = probe_new(np);
+    rng_t r = {seed};
+    for (int i = 0; i < 3 * np; ++i) p.pts[i] = rng_range(&r, -1.0, 1.0);
+    *norm = reference_values(ctx, l, &p);
+    return p;
+}
+
+/* A test's context, light set (owned) and probe of np random points (reference_points). */
+typedef struct {
+    shl_ctx *ctx;
+    shl_lights *l;
+    probe pr;
+    double norm; /* the largest norm of an exact value at the probe's points */
+} fixture;
+
+static fixture fixture_new(shl_lights *l, int np, unsigned seed)
+{
+    fixture f = {ctx_new(), l, {0, NULL, NULL, NULL}, 0.0};
+    f.pr = reference_points(f.ctx, l, np, seed, &f.norm);
+    return f;
+}
+
+static void fixture_free(fixture *f)
+{
+    probe_free(&f->pr);
+    shl_lights_destroy(f->l);
+    shl_ctx_destroy(f->ctx);
 }
 
 /* Accuracy where the budget allows the tolerance (every cell's estimate <= tol,
@@ -250,41 +355,30 @@ static double reference_points(const shl_ctx *ctx, const shl_lights *l, int np, 
  * it also requires the mean error to be below tol. */
 SHL_TEST(agrid_smooth_within_tolerance)
 {
-    shl_ctx *ctx = ctx_new();
-    shl_lights *l = outside_lights();
-    const int r4[3] = {4, 4, 4};
     enum { NP = 2000 };
-    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    const double lmax_norm = reference_points(ctx, l, NP, 3, pts, ref);
+    fixture f = fixture_new(outside_lights(), NP, 3);
     const double tols[2] = {1e-2, 1e-3};
     for (int t = 0; t < 2; ++t) {
-        const double tol = tols[t] * lmax_norm;
-        shl_agrid *g;
+        const double tol = tols[t] * f.norm;
         shl_agrid_stats st;
-        CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, tol, 200000, &g) == SHL_OK);
-        CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-        CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+        shl_agrid *g = filled(f.ctx, f.l, SHL_AGRID_MAX, tol, 200000, &st);
         CHECK(st.unresolved == 0 && st.budget_hit == 0 && st.max_estimate <= tol);
-        CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
+        CHECK(shl_agrid_interp(g, NP, f.pr.pts, f.pr.out, 2) == SHL_OK);
         double worst = 0.0, mean = 0.0;
         int over = 0;
         for (int p = 0; p < NP; ++p) {
-            const double e = err_norm(a + (size_t)p * NV, ref + (size_t)p * NV);
+            const double e = err_norm(f.pr.out + (size_t)p * NV, f.pr.ref + (size_t)p * NV);
             worst = fmax(worst, e);
             mean += e / NP;
             over += e > tol;
         }
-        CHECK(worst <= 4.0 * tol + 1e-5 * lmax_norm);
+        CHECK(worst <= 4.0 * tol + 1e-5 * f.norm);
         CHECK(mean <= tol);
         harness_note("tol %.0e max|L|: %ld nodes, %d levels; max err %.2f tol, mean %.2f tol, %d/%d points > tol",
                      tols[t], st.nodes, st.levels, worst / tol, mean / tol, over, NP);
         shl_agrid_destroy(g);
     }
-    free(pts);
-    free(a);
-    free(ref);
-    shl_lights_destroy(l);
-    shl_ctx_destroy(ctx);
+    fixture_free(&f);
 }
 
 /* C0 across level boundaries: the boundaries of level l's cells (and their rings'
@@ -300,11 +394,8 @@ SHL_TEST(agrid_continuous_across_levels)
     shl_ctx *ctx = ctx_new();
     shl_lights *l = inside_light();
     const int r4[3] = {4, 4, 4};
-    shl_agrid *g;
     shl_agrid_stats st;
-    CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, 1e-2, 30000, &g) == SHL_OK);
-    CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-    CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+    shl_agrid *g = filled(ctx, l, SHL_AGRID_MAX, 1e-2, 30000, &st);
     CHECK(st.levels >= 3);
     shl_grid *u;
     CHECK(shl_grid_create(ctx, box_lo, box_hi, r4, SHL_GRID_FLOAT, &u) == SHL_OK);
@@ -352,45 +443,25 @@ SHL_TEST(agrid_light_inside_refined)
 {
     shl_ctx *ctx = ctx_new();
     shl_lights *l = inside_light();
-    const int r4[3] = {4, 4, 4};
-    shl_agrid *g;
     shl_agrid_stats st;
-    CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MAX, 1e-2, 30000, &g) == SHL_OK);
-    CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-    CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+    shl_agrid *g = filled(ctx, l, SHL_AGRID_MAX, 1e-2, 30000, &st);
     CHECK(st.levels >= 4);
-    int res = 4;
-    while ((long)res * res * res < st.nodes) ++res;
-    const int ru[3] = {res, res, res};
-    shl_grid *u;
-    CHECK(shl_grid_create(ctx, box_lo, box_hi, ru, SHL_GRID_FLOAT, &u) == SHL_OK);
-    CHECK(shl_grid_fill(u, l, 2) == SHL_OK);
     enum { NP = 3000 };
     rng_t r = {9};
-    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *b = malloc(sizeof(double) * NP * NV),
-           *ref = malloc(sizeof(double) * NP * NV);
+    probe pr = probe_new(NP);
     for (int p = 0; p < NP; ++p) {
-        pts[3 * p] = rng_range(&r, 0.05, 0.55);
-        pts[3 * p + 1] = rng_range(&r, -1.0, 1.0);
-        pts[3 * p + 2] = rng_range(&r, -1.0, 1.0);
+        pr.pts[3 * p] = rng_range(&r, 0.05, 0.55);
+        pr.pts[3 * p + 1] = rng_range(&r, -1.0, 1.0);
+        pr.pts[3 * p + 2] = rng_range(&r, -1.0, 1.0);
     }
-    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
-    CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
-    CHECK(shl_grid_interp(u, SHL_INTERP_HERMITE, 0.0, NP, pts, b, 2) == SHL_OK);
-    double ea = 0.0, eu = 0.0;
-    for (int p = 0; p < NP; ++p) {
-        ea += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
-        eu += err_norm(b + (size_t)p * NV, ref + (size_t)p * NV) / NP;
-    }
+    reference_values(ctx, l, &pr);
+    int res;
+    const double ea = agrid_mean_err(g, &pr), eu = uniform_mean_err(ctx, l, st.nodes, &pr, &res);
     const double ha = (2.0 / 3.0) / (1 << (st.levels - 1)), hu = 2.0 / (res - 1);
     CHECK(ea <= 1.25 * (ha / hu) * eu && ea < eu);
     harness_note("near the light: adaptive %ld nodes (%d levels) mean err %.3e, uniform %d^3 mean err %.3e: ratio %.2f, "
                  "spacing ratio %.2f", st.nodes, st.levels, ea, res, eu, ea / eu, ha / hu);
-    free(pts);
-    free(a);
-    free(b);
-    free(ref);
-    shl_grid_destroy(u);
+    probe_free(&pr);
     shl_agrid_destroy(g);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
@@ -407,31 +478,18 @@ SHL_TEST(agrid_light_inside_refined)
  * estimate met the criterion, which is all the bound rests on. */
 SHL_TEST(agrid_mean_criterion_light_inside)
 {
-    shl_ctx *ctx = ctx_new();
-    shl_lights *l = inside_light();
-    const int r4[3] = {4, 4, 4};
     enum { NP = 3000 };
-    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    const double lmax_norm = reference_points(ctx, l, NP, 13, pts, ref);
-    const double tol = 1e-3 * lmax_norm;
-    shl_agrid *g;
+    fixture f = fixture_new(inside_light(), NP, 13);
+    const double tol = 1e-3 * f.norm;
     shl_agrid_stats st;
-    CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, tol, 2000000, &g) == SHL_OK);
-    CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-    CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+    shl_agrid *g = filled(f.ctx, f.l, SHL_AGRID_MEAN, tol, 2000000, &st);
     CHECK(st.unresolved == 0 && st.budget_hit == 0 && st.max_estimate <= tol);
-    CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
-    double mean = 0.0;
-    for (int p = 0; p < NP; ++p) mean += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
+    const double mean = agrid_mean_err(g, &f.pr);
     CHECK(mean <= 3.2 * tol * (double)st.cells / 27.0);
     harness_note("tol 1e-3 max|L|: %ld nodes, %d levels, %ld cells; mean err %.2f tol (bound %.0f tol)", st.nodes, st.levels,
                  st.cells, mean / tol, 3.2 * (double)st.cells / 27.0);
     shl_agrid_destroy(g);
-    free(pts);
-    free(a);
-    free(ref);
-    shl_lights_destroy(l);
-    shl_ctx_destroy(ctx);
+    fixture_free(&f);
 }
 
 /* Budget-driven fills: SHL_AGRID_MEAN at a tolerance no cell meets, so the budget
@@ -447,48 +505,23 @@ SHL_TEST(agrid_mean_criterion_light_inside)
  * children still waiting unestimated make stats.unresolved unknown (-1) or > 0. */
 SHL_TEST(agrid_budget_best_first)
 {
-    shl_ctx *ctx = ctx_new();
-    shl_lights *l = inside_light();
-    const int r4[3] = {4, 4, 4};
     enum { NP = 3000 };
-    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    const double lmax_norm = reference_points(ctx, l, NP, 17, pts, ref);
+    fixture f = fixture_new(inside_light(), NP, 17);
     const long budgets[3] = {1000, 4000, 16000};
     double prev = INFINITY;
     for (int i = 0; i < 3; ++i) {
-        shl_agrid *g;
         shl_agrid_stats st;
-        CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1e-9 * lmax_norm, budgets[i], &g) == SHL_OK);
-        CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-        CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+        shl_agrid *g = filled(f.ctx, f.l, SHL_AGRID_MEAN, 1e-9 * f.norm, budgets[i], &st);
         CHECK(st.budget_hit == 1 && st.unresolved != 0 && st.nodes <= budgets[i]);
-        CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
-        int res = 4;
-        while ((long)res * res * res < st.nodes) ++res;
-        const int ru[3] = {res, res, res};
-        shl_grid *u;
-        CHECK(shl_grid_create(ctx, box_lo, box_hi, ru, SHL_GRID_FLOAT, &u) == SHL_OK);
-        CHECK(shl_grid_fill(u, l, 2) == SHL_OK);
-        double *b = malloc(sizeof(double) * NP * NV);
-        CHECK(shl_grid_interp(u, SHL_INTERP_HERMITE, 0.0, NP, pts, b, 2) == SHL_OK);
-        double ea = 0.0, eu = 0.0;
-        for (int p = 0; p < NP; ++p) {
-            ea += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
-            eu += err_norm(b + (size_t)p * NV, ref + (size_t)p * NV) / NP;
-        }
+        int res;
+        const double ea = agrid_mean_err(g, &f.pr), eu = uniform_mean_err(f.ctx, f.l, st.nodes, &f.pr, &res);
         CHECK(ea < prev && (budgets[i] < 4000 || ea < eu));
         harness_note("budget %ld: %ld nodes, %d levels, %ld samples; mean err %.3e max|L| (uniform %d^3: %.3e, ratio %.2f)",
-                     budgets[i], st.nodes, st.levels, st.samples, ea / lmax_norm, res, eu / lmax_norm, ea / eu);
+                     budgets[i], st.nodes, st.levels, st.samples, ea / f.norm, res, eu / f.norm, ea / eu);
         prev = ea;
-        free(b);
-        shl_grid_destroy(u);
         shl_agrid_destroy(g);
     }
-    free(pts);
-    free(a);
-    free(ref);
-    shl_lights_destroy(l);
-    shl_ctx_destroy(ctx);
+    fixture_free(&f);
 }
 
 /* Level-l cell index (clamped to the box) of point x, coarse 4^3 on box_lo..box_hi. */
@@ -533,55 +566,136 @@ static int refined_cells_hold(const shl_agrid *g, int np, const double *pts, int
  * tolerance (the ratios are noted).  Bad input and a failed allocation: nothing changes. */
 SHL_TEST(agrid_receivers_refine_their_half)
 {
-    shl_ctx *ctx = ctx_new();
-    shl_lights *l = inside_light();
-    const int r4[3] = {4, 4, 4};
     enum { NP = 2000 };
-    double *pts = malloc(sizeof(double) * 3 * NP), *a = malloc(sizeof(double) * NP * NV), *ref = malloc(sizeof(double) * NP * NV);
-    const double lmax_norm = reference_points(ctx, l, NP, 29, pts, ref);
-    for (int p = 0; p < NP; ++p) pts[3 * p] = -0.5 * (pts[3 * p] + 1.0); /* x in (-1, 0] */
-    CHECK(shl_lights_eval_batch(ctx, l, NP, pts, ref, NULL) == SHL_OK);
+    fixture f = fixture_new(inside_light(), NP, 29);
+    for (int p = 0; p < NP; ++p) f.pr.pts[3 * p] = -0.5 * (f.pr.pts[3 * p] + 1.0); /* x in (-1, 0] */
+    reference_values(f.ctx, f.l, &f.pr);
+    {
+        const int r4[3] = {4, 4, 4};
+        const double nan_pt[3] = {0.0, NAN, 0.0};
+        shl_agrid *g;
+        CHECK(shl_agrid_create(f.ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1e-9 * f.norm, 1000, &g) == SHL_OK);
+        CHECK(shl_agrid_set_receivers(g, 1, nan_pt) == SHL_ENONFINITE && g->recv == NULL);
+        CHECK(shl_agrid_set_receivers(g, -1, f.pr.pts) == SHL_EDOMAIN && shl_agrid_set_receivers(g, 1, NULL) == SHL_ENULL);
+        CHECK(shl_agrid_set_receivers(NULL, 0, NULL) == SHL_ENULL && g->recv == NULL);
+        shl__alloc_fail_after = 0;
+        const int oom = shl_agrid_set_receivers(g, NP, f.pr.pts);
+        shl__alloc_fail_after = -1;
+        CHECK(oom == SHL_ENOMEM && g->recv == NULL);
+        shl_agrid_destroy(g);
+    }
     const long budgets[3] = {1000, 4000, 16000};
     double prev = INFINITY;
     for (int i = 0; i < 3; ++i) {
         double e[2];
         shl_agrid_stats sw = {0};
         for (int with = 1; with >= 0; --with) {
-            shl_agrid *g;
             shl_agrid_stats st;
-            CHECK(shl_agrid_create(ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1e-9 * lmax_norm, budgets[i], &g) == SHL_OK);
-            if (with) {
-                const double nan_pt[3] = {0.0, NAN, 0.0};
-                CHECK(shl_agrid_set_receivers(g, 1, nan_pt) == SHL_ENONFINITE && g->recv == NULL);
-                CHECK(shl_agrid_set_receivers(g, -1, pts) == SHL_EDOMAIN && shl_agrid_set_receivers(g, 1, NULL) == SHL_ENULL);
-                CHECK(shl_agrid_set_receivers(NULL, 0, NULL) == SHL_ENULL && g->recv == NULL);
-                shl__alloc_fail_after = 0;
-                const int oom = shl_agrid_set_receivers(g, NP, pts);
-                shl__alloc_fail_after = -1;
-                CHECK(oom == SHL_ENOMEM && g->recv == NULL);
-                CHECK(shl_agrid_set_receivers(g, NP, pts) == SHL_OK);
-            }
-            CHECK(shl_agrid_fill(g, l, 2) == SHL_OK);
-            CHECK(shl_agrid_get_stats(g, &st) == SHL_OK);
+            shl_agrid *g = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, 1e-9 * f.norm, budgets[i], with ? NP : 0, f.pr.pts, NULL, &st);
             CHECK(st.budget_hit == 1 && st.nodes <= budgets[i] && st.levels >= 2);
             int outside;
-            const int held = refined_cells_hold(g, NP, pts, &outside);
+            const int held = refined_cells_hold(g, NP, f.pr.pts, &outside);
             CHECK(with ? held && !outside : outside);
-            CHECK(shl_agrid_interp(g, NP, pts, a, 2) == SHL_OK);
-            e[with] = 0.0;
-            for (int p = 0; p < NP; ++p) e[with] += err_norm(a + (size_t)p * NV, ref + (size_t)p * NV) / NP;
+            e[with] = agrid_mean_err(g, &f.pr);
             if (with) sw = st;
             shl_agrid_destroy(g);
         }
         CHECK(e[1] < prev && e[1] < e[0]);
         harness_note("budget %ld with receivers: %ld nodes, %d levels, %ld samples; mean err at the receivers %.3e max|L| "
                      "(without receivers %.3e: ratio %.2f)",
-                     budgets[i], sw.nodes, sw.levels, sw.samples, e[1] / lmax_norm, e[0] / lmax_norm, e[1] / e[0]);
+                     budgets[i], sw.nodes, sw.levels, sw.samples, e[1] / f.norm, e[0] / f.norm, e[1] / e[0]);
         prev = e[1];
     }
-    free(pts);
+    fixture_free(&f);
+}
+
+/* The grid's interpolated values at the probe's points and its stats equal those of grid h, bit for bit. */
+static int same_grids(const shl_agrid *g, const shl_agrid *h, const probe *p)
+{
+    double *a = malloc(sizeof(double) * NV * (size_t)p->n), *b = malloc(sizeof(double) * NV * (size_t)p->n);
+    shl_agrid_stats sg, sh;
+    CHECK(a && b && shl_agrid_get_stats(g, &sg) == SHL_OK && shl_agrid_get_stats(h, &sh) == SHL_OK);
+    CHECK(shl_agrid_interp(g, p->n, p->pts, a, 2) == SHL_OK && shl_agrid_interp(h, p->n, p->pts, b, 2) == SHL_OK);
+    const int same = memcmp(a, b, sizeof(double) * NV * (size_t)p->n) == 0 && sg.nodes == sh.nodes &&
+                     sg.samples == sh.samples && sg.levels == sh.levels && sg.max_estimate == sh.max_estimate;
     free(a);
-    free(ref);
-    shl_lights_destroy(l);
-    shl_ctx_destroy(ctx);
+    free(b);
+    return same;
+}
+
+/* Weighted receivers (shl_agrid_set_weighted_receivers), light inside the box, MEAN,
+ * budget-driven (4000 nodes).  Exact identities against independent set-ups, bit for
+ * bit: (1) unit weights give the unweighted grid; (2) weight 2 on every receiver gives
+ * the grid of every receiver listed twice with weight 1 (a cell's share of the weight
+ * and its samples, at 1/4 and 3/4 of its cumulative weight, are the same: sums of small
+ * integers are exact); (3) weight 0 on the receivers in x > 0 gives the grid of the
+ * others alone.  (4) The weights steer the refinement: receivers in the whole box,
+ * weight 1 in x < 0 and 1e-3 in x > 0 (where the light is): the weighted mean error at
+ * the receivers is below that of the unweighted fill with the same budget (strict, the
+ * ratio noted).  Bad weights (< 0, non-finite, all 0) and failed allocations: the call
+ * fails, nothing changes. */
+SHL_TEST(agrid_weighted_receivers)
+{
+    enum { NP = 1500 };
+    fixture f = fixture_new(inside_light(), NP, 31);
+    double *w = malloc(sizeof(double) * NP), *twice = malloc(sizeof(double) * 6 * NP), *left = malloc(sizeof(double) * 3 * NP);
+    CHECK(w && twice && left);
+    {
+        const int r4[3] = {4, 4, 4};
+        const double bad[3][2] = {{1.0, -1.0}, {1.0, NAN}, {0.0, 0.0}};
+        const int want[3] = {SHL_EDOMAIN, SHL_ENONFINITE, SHL_EDOMAIN};
+        shl_agrid *g;
+        CHECK(shl_agrid_create(f.ctx, box_lo, box_hi, r4, SHL_AGRID_MEAN, 1.0, 1000, &g) == SHL_OK);
+        for (int k = 0; k < 3; ++k) CHECK(shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, bad[k]) == want[k] && g->recv == NULL);
+        const double good[2] = {1.0, 3.0};
+        for (long k = 0; k < 2; ++k) { /* the receivers' copy, then their prefix sums, failing */
+            shl__alloc_fail_after = k;
+            const int oom = shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, good);
+            shl__alloc_fail_after = -1;
+            CHECK(oom == SHL_ENOMEM && g->recv == NULL && g->recv_cum == NULL);
+        }
+        CHECK(shl_agrid_set_weighted_receivers(g, 2, f.pr.pts, good) == SHL_OK && g->nrecv == 2 && g->recv_cum[2] == 4.0);
+        shl_agrid_destroy(g);
+    }
+    const double tol = 1e-9 * f.norm;
+    const long budget = 4000;
+    shl_agrid_stats st;
+    shl_agrid *plain = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, NP, f.pr.pts, NULL, &st);
+    for (int p = 0; p < NP; ++p) w[p] = 1.0;
+    shl_agrid *unit = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, NP, f.pr.pts, w, &st);
+    CHECK(same_grids(unit, plain, &f.pr));
+    for (int p = 0; p < NP; ++p) {
+        w[p] = 2.0;
+        memcpy(twice + 6 * p, f.pr.pts + 3 * p, 3 * sizeof(double));
+        memcpy(twice + 6 * p + 3, f.pr.pts + 3 * p, 3 * sizeof(double));
+    }
+    shl_agrid *doubled = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, NP, f.pr.pts, w, &st);
+    shl_agrid *listed_twice = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, 2 * NP, twice, NULL, &st);
+    CHECK(same_grids(doubled, listed_twice, &f.pr));
+    int nleft = 0;
+    for (int p = 0; p < NP; ++p) {
+        w[p] = f.pr.pts[3 * p] > 0.0 ? 0.0 : 1.0;
+        if (w[p] > 0.0) memcpy(left + 3 * nleft++, f.pr.pts + 3 * p, 3 * sizeof(double));
+    }
+    shl_agrid *zeroed = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, NP, f.pr.pts, w, &st);
+    shl_agrid *subset = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, nleft, left, NULL, &st);
+    CHECK(same_grids(zeroed, subset, &f.pr));
+    double wsum = 0.0;
+    for (int p = 0; p < NP; ++p) wsum += w[p] = f.pr.pts[3 * p] > 0.0 ? 1e-3 : 1.0;
+    shl_agrid *steered = filled_for(f.ctx, f.l, SHL_AGRID_MEAN, tol, budget, NP, f.pr.pts, w, &st);
+    double e[2] = {0.0, 0.0};
+    const shl_agrid *grids[2] = {plain, steered};
+    for (int k = 0; k < 2; ++k) {
+        CHECK(shl_agrid_interp(grids[k], NP, f.pr.pts, f.pr.out, 2) == SHL_OK);
+        for (int p = 0; p < NP; ++p) e[k] += w[p] * err_norm(f.pr.out + (size_t)p * NV, f.pr.ref + (size_t)p * NV) / wsum;
+    }
+    CHECK(e[1] < e[0]);
+    harness_note("budget %ld: weighted mean err %.3e max|L| with the weights, %.3e without (ratio %.2f)", budget,
+                 e[1] / f.norm, e[0] / f.norm, e[1] / e[0]);
+    shl_agrid *all[7] = {plain, unit, doubled, listed_twice, zeroed, subset, steered};
+    for (int k = 0; k < 7; ++k) shl_agrid_destroy(all[k]);
+    free(w);
+    free(twice);
+    free(left);
+    fixture_free(&f);
 }

@@ -362,7 +362,8 @@ def agrid_image(rows, out):
     """bench/bench_agrid.c, rendered scenes: image rel. MAE vs nodes and vs fill time, uniform grids and
     adaptive ones (tolerance-driven per coarse resolution, budget-driven), uniform 32^3's error dashed."""
     styles = (("uniform", "o", "tab:blue", "-"), ("mean", "^", "tab:green", ":"), ("budget", "v", "tab:orange", "-"),
-              ("mean-recv", "s", "tab:red", ":"), ("budget-recv", "D", "tab:purple", "-"))  # -recv: shl_agrid_set_receivers
+              ("mean-recv", "s", "tab:red", ":"), ("budget-recv", "D", "tab:purple", "-"),  # -recv: shl_agrid_set_receivers
+              ("mean-wrecv", "P", "tab:brown", ":"), ("budget-wrecv", "X", "tab:olive", "-"))  # pixel-weighted receivers
     for scene in OrderedDict((r["scene"], 1) for r in rows):
         srows = [r for r in rows if r["scene"] == scene]
         u32 = [float(r["rel_mae"]) for r in srows if r["kind"] == "uniform" and r["res"] == "32"]

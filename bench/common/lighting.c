@@ -117,8 +117,8 @@ lighting *lighting_prepare(const scene *s, const lighting_method *m, const doubl
         const int res[3] = {m->grid_res, m->grid_res, m->grid_res};
         if (m->kind == LM_AGRID ? shl_agrid_create(L->ctx, lo, hi, res, m->agrid_criterion, m->agrid_tol, m->agrid_budget,
                                                    &L->agrid) != SHL_OK ||
-                                      shl_agrid_set_receivers(L->agrid, m->agrid_receivers ? m->agrid_nreceivers : 0,
-                                                              m->agrid_receivers) != SHL_OK ||
+                                      shl_agrid_set_weighted_receivers(L->agrid, m->agrid_receivers ? m->agrid_nreceivers : 0,
+                                                                       m->agrid_receivers, m->agrid_receiver_weights) != SHL_OK ||
                                       shl_agrid_fill(L->agrid, L->set, nthreads) != SHL_OK
                                 : shl_grid_create(L->ctx, lo, hi, res, m->grid_storage, &L->grid) != SHL_OK ||
                                       shl_grid_fill(L->grid, L->set, nthreads) != SHL_OK)

@@ -34,6 +34,7 @@ typedef struct {
     long agrid_budget;                  /* and node budget */
     const double *agrid_receivers;      /* AGRID: receivers (shl_agrid_set_receivers), NULL: none */
     int agrid_nreceivers;
+    const double *agrid_receiver_weights; /* AGRID: their weights (shl_agrid_set_weighted_receivers), NULL: all 1 */
     double taylor_b;                    /* GRID with SHL_INTERP_TAYLOR; SINGLE / TAYLOR1 with npoints > 1 */
     long mc_samples;                    /* MC */
     int mc_stratified;                  /* MC, polygon lights only: about mc_samples jittered strata split over
