@@ -559,7 +559,8 @@ static void fr_empty_calls(void *a)
 }
 
 /* The fixed cost of a threaded call: 2 threads minus 1 thread on two blocks of no work
- * (thread creation, start gate, join), against the shortest 2-thread call of the table. */
+ * (handing work to the second thread, waiting for it), against the shortest 2-thread
+ * call of the table. */
 static void thread_start_cost(double shortest_call)
 {
     enum { NPTS = 2 * 64 };
@@ -571,8 +572,8 @@ static void thread_start_cost(double shortest_call)
     j2.nthreads = 2;
     const paired m = time_pair(fr_empty_calls, &j1, fr_empty_calls, &j2);
     const double cost = (m.wall_b - m.wall_a) / 100;
-    printf("\nFixed cost of a 2-thread call (thread start and join; 2 threads minus 1 on two blocks of no work,\n"
-           "medians of %d rounds of 100 calls): %.1f us per call, %.2f%% of the shortest 2-thread call above.\n",
+    printf("\nFixed cost of a 2-thread call (handing work to the second thread and waiting for it; 2 threads minus 1\n"
+           "on two blocks of no work, medians of %d rounds of 100 calls): %.1f us per call, %.2f%% of the shortest 2-thread call above.\n",
            ROUNDS, cost * 1e6, 100.0 * cost / shortest_call);
     if (csv) fprintf(csv, "threads_start,empty_set,%d,%.6e,%.6e\n", NPTS, cost, cost / shortest_call);
     bench_sink += rgb[0];

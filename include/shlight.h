@@ -207,8 +207,9 @@ typedef struct shl_grid shl_grid;
 /**
  * Largest thread count of the threaded entry points.  Their threads (all but the
  * calling one) come from one process-wide pool: created when a call first needs
- * them, parked between calls (a call wakes them instead of creating threads),
- * joined at exit; a forked child starts an empty pool.  While one threaded call
+ * them, parked between calls (a call wakes them instead of creating threads, and
+ * does not wait for one that has not started when all the work is taken), joined
+ * at exit; a forked child starts an empty pool.  While one threaded call
  * runs, a threaded call from another thread runs on its calling thread alone
  * (same results: they never depend on nthreads).
  */

@@ -41,8 +41,10 @@ static void run_chunks(loop *p, int worker)
 }
 
 /* The pool, under pool_lock.  One call at a time owns it (busy); the owner alone
- * creates workers and changes size.  Worker w (1 <= w <= size) takes part in
- * each round once if w < round_workers. */
+ * creates workers and changes size.  Worker w (1 <= w <= size) takes part in a
+ * round if w < round_workers and it wakes while the owner still works on the
+ * round's job: the owner waits only for the workers that joined (running), never
+ * for one that other processes kept off the CPU. */
 static pthread_mutex_t pool_lock = PTHREAD_MUTEX_INITIALIZER;
 static pthread_cond_t pool_wake = PTHREAD_COND_INITIALIZER; /* a new round, or exit */
 static pthread_cond_t pool_done = PTHREAD_COND_INITIALIZER; /* the round's last worker finished */
@@ -64,8 +66,9 @@ static void *worker_main(void *arg)
         while (pool.round == seen && !pool.exiting) pthread_cond_wait(&pool_wake, &pool_lock);
         if (pool.exiting) break;
         seen = pool.round;
-        if (w < pool.round_workers) {
+        if (pool.job && w < pool.round_workers) {
             loop *job = pool.job;
+            ++pool.running;
             pthread_mutex_unlock(&pool_lock);
             run_chunks(job, w);
             pthread_mutex_lock(&pool_lock);
@@ -149,14 +152,13 @@ static int parallel_run(long n, long grain, int nthreads, int guided, shl__range
     if (started) {
         pool.job = &p;
         pool.round_workers = nw;
-        pool.running = nw - 1;
         ++pool.round;
         pthread_cond_broadcast(&pool_wake);
         pthread_mutex_unlock(&pool_lock);
-        run_chunks(&p, 0);
+        run_chunks(&p, 0); /* returns when every chunk is claimed */
         pthread_mutex_lock(&pool_lock);
+        pool.job = NULL; /* workers waking from now on skip this round */
         while (pool.running > 0) pthread_cond_wait(&pool_done, &pool_lock);
-        pool.job = NULL;
     }
     pool.busy = 0;
     pthread_mutex_unlock(&pool_lock);
