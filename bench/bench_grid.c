@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 static FILE *csv;
 static shl_lights *subdivided_light(int nl);
@@ -461,16 +462,58 @@ static double cpu_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* Best of `reps` times of one call of fn(arg): wall clock, or CPU time if cpu. */
-static double best_of(void (*fn)(void *), void *arg, int reps, int cpu)
+/* Busy and total seconds of all CPUs since boot (the first line of /proc/stat; 0 and 0 where
+ * it cannot be read): with the process CPU time, the share of the cores other processes held. */
+static void machine_cpu(double *busy, double *total)
 {
-    double best = INFINITY;
-    for (int rep = 0; rep < reps; ++rep) {
-        const double t0 = cpu ? cpu_now() : bench_now();
-        fn(arg);
-        best = fmin(best, (cpu ? cpu_now() : bench_now()) - t0);
+    unsigned long long v[8] = {0};
+    FILE *f = fopen("/proc/stat", "r");
+    const int got = f ? fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                               &v[6], &v[7])
+                      : 0;
+    if (f) fclose(f);
+    const double tick = (double)sysconf(_SC_CLK_TCK);
+    double sum = 0.0;
+    for (int k = 0; k < 8; ++k) sum += (double)v[k];
+    *total = got == 8 ? sum / tick : 0.0;
+    *busy = got == 8 ? (sum - (double)v[3] - (double)v[4]) / tick : 0.0; /* all but idle and iowait */
+}
+
+enum { ROUNDS = 11 }; /* interleaved rounds of the -f tables (after one warm-up call of each variant) */
+
+/* Wall-clock and process CPU seconds of one call of fn(arg). */
+static void time_call(void (*fn)(void *), void *arg, double *wall, double *cpu)
+{
+    const double w0 = bench_now(), c0 = cpu_now();
+    fn(arg);
+    const double c1 = cpu_now(), w1 = bench_now();
+    *wall = w1 - w0;
+    *cpu = c1 - c0;
+}
+
+/* ROUNDS rounds of a against b, back to back under the same load, the order alternating
+ * between rounds (after a warm-up call of each: outputs and workspaces touched).  Per round:
+ * wall and process CPU seconds of both; returns the medians and the medians of the
+ * per-round ratios a / b (wall and CPU). */
+typedef struct {
+    double wall_a, wall_b, cpu_a, cpu_b, wall_ratio, cpu_ratio;
+} paired;
+
+static paired time_pair(void (*fa)(void *), void *a, void (*fb)(void *), void *b)
+{
+    double wa[ROUNDS], wb[ROUNDS], ca[ROUNDS], cb[ROUNDS], wr[ROUNDS], cr[ROUNDS];
+    fa(a);
+    fb(b);
+    for (int r = 0; r < ROUNDS; ++r) {
+        if (r & 1) time_call(fb, b, &wb[r], &cb[r]);
+        time_call(fa, a, &wa[r], &ca[r]);
+        if (!(r & 1)) time_call(fb, b, &wb[r], &cb[r]);
+        wr[r] = wa[r] / wb[r];
+        cr[r] = ca[r] / cb[r];
     }
-    return best;
+    const paired m = {bench_median(wa, ROUNDS), bench_median(wb, ROUNDS), bench_median(ca, ROUNDS),
+                      bench_median(cb, ROUNDS), bench_median(wr, ROUNDS), bench_median(cr, ROUNDS)};
+    return m;
 }
 
 typedef struct {
@@ -506,6 +549,38 @@ static void fr_sphere(void *a)
     must(shl_sphere_batch_f_mt(j->ctx, j->center, 0.3f, j->npts, j->pts, j->rgb, j->grad, j->nthreads), "sphere batch");
 }
 
+/* 100 calls of the light-set batch with an empty set at lmax 0 on 128 points (two blocks:
+ * two workers when nthreads = 2, each with next to nothing to do). */
+static void fr_empty_calls(void *a)
+{
+    const fr_job *j = a;
+    for (int c = 0; c < 100; ++c)
+        must(shl_lights_eval_batch_f_mt(j->ctx, j->l, j->npts, j->pts, j->rgb, NULL, j->nthreads), "empty batch");
+}
+
+/* The fixed cost of a threaded call: 2 threads minus 1 thread on two blocks of no work
+ * (handing work to the second thread, waiting for it), against the shortest 2-thread
+ * call of the table. */
+static void thread_start_cost(double shortest_call)
+{
+    enum { NPTS = 2 * 64 };
+    shl_ctx *ctx = new_ctx(0);
+    shl_lights *l;
+    must(shl_lights_create(&l), "lights");
+    float pts[3 * NPTS] = {0}, rgb[3 * NPTS];
+    fr_job j1 = {ctx, l, NULL, NPTS, 1, pts, NULL, NULL, rgb, NULL, NULL, NULL, NULL}, j2 = j1;
+    j2.nthreads = 2;
+    const paired m = time_pair(fr_empty_calls, &j1, fr_empty_calls, &j2);
+    const double cost = (m.wall_b - m.wall_a) / 100;
+    printf("\nFixed cost of a 2-thread call (handing work to the second thread and waiting for it; 2 threads minus 1\n"
+           "on two blocks of no work, medians of %d rounds of 100 calls): %.1f us per call, %.2f%% of the shortest 2-thread call above.\n",
+           ROUNDS, cost * 1e6, 100.0 * cost / shortest_call);
+    if (csv) fprintf(csv, "threads_start,empty_set,%d,%.6e,%.6e\n", NPTS, cost, cost / shortest_call);
+    bench_sink += rgb[0];
+    shl_lights_destroy(l);
+    shl_ctx_destroy(ctx);
+}
+
 /* Issue 17 target: a float grid's fill per node (gradients, 1 thread) <= 1.3x the
  * float light-set batch with gradients per point, same lights, at the same points
  * (the node positions rounded to float); then 2 threads vs 1 on every batch entry point. */
@@ -518,9 +593,10 @@ static void fill_rate(void)
     float *pts = xmalloc(sizeof(float) * 3 * NN);
     printf("\n## Grid fill per node vs the float light-set batch per point (16^3 float grid, gradients, one thread)\n\n"
            "Same lights (the Fig. 8 rectangle as n triangles), same points (the %d node positions rounded to float);\n"
-           "process CPU time (one thread: not inflated by other processes), best of 5.  Target (issue 17):\n"
-           "fill / batch <= 1.3.\n\n"
-           "| lmax | lights | fill ns/node | shl_lights_eval_batch_f ns/point | fill / batch |\n|---|---|---|---|---|\n", NN);
+           "process CPU time (one thread: not inflated by other processes); medians of %d interleaved rounds, fill / batch\n"
+           "the median of the per-round ratios.  Target (issue 17): fill / batch <= 1.3.\n\n"
+           "| lmax | lights | fill ns/node | shl_lights_eval_batch_f ns/point | fill / batch |\n|---|---|---|---|---|\n", NN,
+           ROUNDS);
     const int lmaxes[2] = {4, 8}, nls[3] = {1, 8, 32};
     for (int li = 0; li < 2; ++li) {
         shl_ctx *ctx = new_ctx(lmaxes[li]);
@@ -537,10 +613,11 @@ static void fill_rate(void)
                 for (int a = 0; a < 3; ++a) pts[3 * i + a] = (float)x[a];
             }
             fr_job j = {ctx, l, g, NN, 1, pts, NULL, NULL, rgb, grad, NULL, NULL, NULL};
-            const double tf = best_of(fr_fill, &j, 5, 1), tb = best_of(fr_set_f, &j, 5, 1);
+            const paired m = time_pair(fr_fill, &j, fr_set_f, &j);
             bench_sink += rgb[0];
-            printf("| %d | %d | %.0f | %.0f | %.2f |\n", lmaxes[li], nls[n], tf / NN * 1e9, tb / NN * 1e9, tf / tb);
-            if (csv) fprintf(csv, "fillrate,lmax%d_lights%d,%d,%.6e,%.6e\n", lmaxes[li], nls[n], NN, tf / NN, tb / NN);
+            printf("| %d | %d | %.0f | %.0f | %.2f |\n", lmaxes[li], nls[n], m.cpu_a / NN * 1e9, m.cpu_b / NN * 1e9,
+                   m.cpu_ratio);
+            if (csv) fprintf(csv, "fillrate,lmax%d_lights%d,%d,%.6e,%.6e\n", lmaxes[li], nls[n], NN, m.cpu_a / NN, m.cpu_b / NN);
             shl_grid_destroy(g);
             shl_lights_destroy(l);
         }
@@ -567,9 +644,17 @@ static void fill_rate(void)
     shl_grid *g;
     const int r32[3] = {32, 32, 32};
     must(shl_grid_create(ctx, lo, hi, r32, SHL_GRID_FLOAT, &g), "grid");
-    printf("\n## Threads on every batch entry point (lmax %d, gradients, 8 triangle lights for the sets; wall clock,\n"
-           "best of 3: meaningful only on an idle machine)\n\n"
-           "| entry point | points | 1 thread ms | 2 threads ms | speed-up |\n|---|---|---|---|---|\n", TL);
+    char load[64];
+    bench_loadavg(load, sizeof load);
+    printf("\n## Threads on every batch entry point (lmax %d, gradients, 8 triangle lights for the sets)\n\n"
+           "Medians of %d interleaved rounds (1 thread and 2 threads back to back, the order alternating); speed-up:\n"
+           "the median of the per-round wall-clock ratios.  CPU efficiency: process CPU time, 1 thread / 2 threads\n"
+           "(both threads' time): below 100%%, each core works slower next to the other (shared L3 and DRAM\n"
+           "bandwidth, clock); the speed-up the threads' CPU time allows is 2 x that, and a wall-clock speed-up\n"
+           "below it is time a thread did not run (start, join, uneven ends or, on a loaded machine, other\n"
+           "processes).  Load average before the table: %s\n\n"
+           "| entry point | points | 1 thread ms | 2 threads ms | speed-up | CPU efficiency | speed-up by CPU time |\n"
+           "|---|---|---|---|---|---|---|\n", TL, ROUNDS, load);
     struct {
         const char *name;
         void (*fn)(void *);
@@ -579,14 +664,28 @@ static void fill_rate(void)
                 {"shl_lights_eval_batch_f_mt", fr_set_f, NP / 4},
                 {"shl_lights_eval_batch_mt (double)", fr_set_d, ND},
                 {"shl_grid_fill (32^3 float)", fr_fill, 32 * 32 * 32}};
+    double shortest = INFINITY, busy0, total0;
+    machine_cpu(&busy0, &total0);
+    const double own0 = cpu_now();
     for (int e = 0; e < 5; ++e) {
-        fr_job j = {ctx, l, g, eps[e].npts, 1, bp, tri, center, rgb, grad, dp, drgb, dgrad};
-        const double t1 = best_of(eps[e].fn, &j, 3, 0);
-        j.nthreads = 2;
-        const double t2 = best_of(eps[e].fn, &j, 3, 0);
-        printf("| %s | %d | %.2f | %.2f | %.2fx |\n", eps[e].name, eps[e].npts, t1 * 1e3, t2 * 1e3, t1 / t2);
-        if (csv) fprintf(csv, "threads_batch,%s,%d,%.6e,%.6e\n", eps[e].name, eps[e].npts, t1, t2);
+        fr_job j1 = {ctx, l, g, eps[e].npts, 1, bp, tri, center, rgb, grad, dp, drgb, dgrad}, j2 = j1;
+        j2.nthreads = 2;
+        const paired m = time_pair(eps[e].fn, &j1, eps[e].fn, &j2);
+        shortest = fmin(shortest, m.wall_b);
+        printf("| %s | %d | %.2f | %.2f | **%.2fx** | %.0f%% | %.2fx |\n", eps[e].name, eps[e].npts, m.wall_a * 1e3,
+               m.wall_b * 1e3, m.wall_ratio, 100.0 * m.cpu_ratio, 2.0 * m.cpu_ratio);
+        if (csv) {
+            fprintf(csv, "threads_batch,%s,%d,%.6e,%.6e\n", eps[e].name, eps[e].npts, m.wall_a, m.wall_b);
+            fprintf(csv, "threads_batch_ratio,%s,%d,%.4f,%.4f\n", eps[e].name, eps[e].npts, m.wall_ratio, m.cpu_ratio);
+        }
     }
+    double busy1, total1;
+    machine_cpu(&busy1, &total1);
+    if (total1 > total0)
+        printf("\nOther processes held %.0f%% of the machine's CPU time during the table (/proc/stat busy time less\n"
+               "this process's CPU time): near 0 on an idle machine; the wall-clock speed-ups mean little above ~10%%.\n",
+               100.0 * fmax(0.0, (busy1 - busy0) - (cpu_now() - own0)) / (total1 - total0));
+    thread_start_cost(shortest);
     bench_sink += rgb[0] + drgb[0];
     shl_grid_destroy(g);
     shl_lights_destroy(l);
@@ -604,7 +703,7 @@ int main(int argc, char **argv)
 {
     const char *dir = "build/bench", *only = NULL;
     const bench_opt opts[] = {{"-d", "--dir", "DIR", &dir, "directory of the two CSV files (default build/bench)"},
-                              {"-f", "--fill-rate", NULL, &only, "only the fill-rate and batch-thread tables (~15 s)"}};
+                              {"-f", "--fill-rate", NULL, &only, "only the fill-rate and batch-thread tables (~30 s)"}};
     const bench_cli cli = {
         "bench_grid", "[-d DIR]",
         "Gradients, sparse grids and interpolation (Wu et al. 2020, Sec. 6-7): Fig. 4 (coefficient (7,2)\n"
@@ -624,13 +723,8 @@ int main(int argc, char **argv)
     fprintf(csv, "section,case,count,value1,value2\n");
     const double t0 = bench_now();
     bench_print_machine(stdout);
-    FILE *la = fopen("/proc/loadavg", "r");
-    char load[64] = "unknown";
-    if (la) {
-        if (!fgets(load, sizeof load, la)) snprintf(load, sizeof load, "unknown");
-        load[strcspn(load, "\n")] = '\0';
-        fclose(la);
-    }
+    char load[64];
+    bench_loadavg(load, sizeof load);
     printf("Load average at start (other processes share the 2 cores): %s\n", load);
     if (!only) {
         bench_progress("Fig. 4, interpolation along a line (step 1/5)...");

@@ -15,7 +15,8 @@
  *  - per-vertex set-up cost: lmax 0 (3 coefficients, shorter than a vector: both
  *    variants run the reference) is the cell search and weights plus 8 tiny loads,
  *    the part vectorizing across coefficients does not touch; 2 threads against 1,
- *    with the CPU efficiency (process CPU time, 1 thread / 2 threads);
+ *    with the CPU efficiency (process CPU time, 1 thread / 2 threads) and, from DRAM, the share
+ *    of the read bandwidth of both cores together (the memory-bound ceiling);
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
  * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
 #if defined(__linux__) && !defined(_DEFAULT_SOURCE)
@@ -24,6 +25,7 @@
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -136,6 +138,38 @@ static double read_bw(const double *a, size_t n, int reps)
     const double t = one_core_now() - t0;
     bench_sink += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7;
     return (double)reps * n * sizeof(double) / t;
+}
+
+/* ---- read bandwidth of both cores together: the ceiling of a read-bound loop on 2 threads ---- */
+typedef struct {
+    const double *a;
+    size_t n; /* a multiple of 8 */
+    double sum;
+} read_part;
+
+static void *sum_part(void *arg)
+{
+    read_part *p = arg;
+    double s[8] = {0};
+    for (size_t i = 0; i < p->n; i += 8)
+        for (int k = 0; k < 8; ++k) s[k] += p->a[i + k];
+    p->sum = ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
+    return NULL;
+}
+
+/* Bytes per second of two threads reading a[0 .. n) together, one half each (n a multiple of
+ * 16), by the wall clock from the thread's creation to its join (~50 us against ~10 ms). */
+static double read_bw_two_cores(const double *a, size_t n)
+{
+    read_part half[2] = {{a, n / 2, 0.0}, {a + n / 2, n / 2, 0.0}};
+    pthread_t t;
+    const double t0 = bench_now();
+    if (pthread_create(&t, NULL, sum_part, &half[1])) return 0.0;
+    sum_part(&half[0]);
+    pthread_join(t, NULL);
+    const double dt = bench_now() - t0;
+    bench_sink += half[0].sum + half[1].sum;
+    return (double)n * sizeof(double) / dt;
 }
 
 static double triad_bw(double *a, const double *b, const double *c, size_t n)
@@ -278,7 +312,8 @@ int main(int argc, char **argv)
              "(random vertex order), the SIMD kernel against the scalar reference, with and without the\n"
              "look-ahead (calls of one vertex: the order before it), bytes per vertex and the share of this\n"
              "core's read bandwidth (DRAM, resp. L2, measured in the same run), random vs cell-sorted vertex\n"
-             "order, 2 threads against 1, and the papers' GPU throughput next to ours.\n"
+             "order, 2 threads against 1 (from DRAM: the share of both cores' read bandwidth together), and the\n"
+             "papers' GPU throughput next to ours.\n"
              "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
              "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
              "--mb "
@@ -323,7 +358,7 @@ int main(int argc, char **argv)
 
     bw_doubles = out_of_cache_bytes() / sizeof(double);
     if (bw_doubles < ((size_t)1 << 25)) bw_doubles = (size_t)1 << 25;
-    bw_doubles &= ~(size_t)7; /* read_bw sums 8 at a time */
+    bw_doubles &= ~(size_t)15; /* read_bw sums 8 at a time; read_bw_two_cores, two halves of 8 at a time */
     bench_progress("filling the bandwidth arrays, %.0f MB (step 1/5)...", 1.5 * sizeof(double) * (double)bw_doubles / (1 << 20));
     double *bw_a = xmalloc(sizeof(double) * bw_doubles), *bw_b = xmalloc(sizeof(double) * bw_doubles / 4),
            *bw_c = xmalloc(sizeof(double) * bw_doubles / 4);
@@ -339,17 +374,18 @@ int main(int argc, char **argv)
     int hp_advised;
     double *bw_h = huge_malloc(sizeof(double) * bw_doubles, &hp_advised);
     for (size_t i = 0; i < bw_doubles; ++i) bw_h[i] = 1.0 / (1.0 + (double)(i & 1023));
-    double rbw[5], tbw[5], l2bw[5], hbw[5];
+    double rbw[5], tbw[5], l2bw[5], hbw[5], r2bw[5];
     bench_progress("memory bandwidth, 5 rounds (step 2/5)...");
     for (int r = 0; r < 5; ++r) {
         rbw[r] = read_bw(bw_a, bw_doubles, 1);
+        r2bw[r] = read_bw_two_cores(bw_a, bw_doubles);
         hbw[r] = read_bw(bw_h, bw_doubles, 1);
         tbw[r] = triad_bw(bw_a, bw_b, bw_c, bw_doubles / 4);
         read_bw(bw_b, l2_doubles, 10); /* warm */
         l2bw[r] = read_bw(bw_b, l2_doubles, 2000);
     }
     const double read_peak = bench_median(rbw, 5), triad_peak = bench_median(tbw, 5), l2_peak = bench_median(l2bw, 5);
-    const double huge_read = bench_median(hbw, 5), huge_mb = anon_huge_mb();
+    const double huge_read = bench_median(hbw, 5), huge_mb = anon_huge_mb(), read_two = bench_median(r2bw, 5);
     free(bw_h);
     free(bw_a); /* before the grids: the peak memory is then two grids, not the arrays as well */
     free(bw_b);
@@ -360,6 +396,9 @@ int main(int argc, char **argv)
     printf("Memory bandwidth, one core (median of 5): read (sum of %.0f MB) %.1f GB/s, triad (3 x %.0f MB, 24 B/element) %.1f GB/s;\n"
            "L2 read (sum of %.0f KB, the L2 grid's size at lmax 8, 2000 times) %.1f GB/s\n",
            mb, read_peak * 1e-9, mb / 4, triad_peak * 1e-9, l2_doubles * sizeof(double) / 1024.0, l2_peak * 1e-9);
+    printf("Read bandwidth of both cores together (2 threads, one half of the same %.0f MB each, wall clock, median\n"
+           "of 5): %.1f GB/s, %.2fx one core's: the ceiling of a read-bound loop's 2-thread speed-up.\n",
+           mb, read_two * 1e-9, read_two / read_peak);
     printf("Read bandwidth is ordinary memory's (malloc).  Not the reference: the same read from a 2 MiB-aligned array\n"
            "advised as huge pages (%s; %.0f MB of this process in huge pages then): %.1f GB/s\n",
            hp_advised ? "madvise MADV_HUGEPAGE taken" : "no huge-page advice here", huge_mb, huge_read * 1e-9);
@@ -368,6 +407,7 @@ int main(int argc, char **argv)
                      "ns_no_lookahead,of_read_bw_no_lookahead,cpu_efficiency\n");
         fprintf(csv, "bandwidth,,,,,,,,,,%.3f,%.3f,,,\n", read_peak * 1e-9, triad_peak * 1e-9);
         fprintf(csv, "bandwidth_l2,,,,,,,,,,%.3f,,,,\n", l2_peak * 1e-9);
+        fprintf(csv, "bandwidth_two_cores,,,,,,,,,,%.3f,,,,\n", read_two * 1e-9);
         fprintf(csv, "bandwidth_huge_pages,,,,,,,,,,%.3f,,,,\n", huge_read * 1e-9);
     }
 
@@ -482,8 +522,11 @@ int main(int argc, char **argv)
            "100%%, each core works slower next to the other (shared memory, clock); the speed-up the threads' CPU time\n"
            "allows is 2 x that; a wall-clock speed-up below it is time the threads do not run (start, wake-up,\n"
            "uneven ends, or, on a loaded machine, other processes).\n\n");
+    printf("From DRAM, 2 threads GB/s = grid bytes/vertex / 2-thread time per vertex, against the read bandwidth of both\n"
+           "cores together (%.1f GB/s above): the memory-bound ceiling; from L2 each core reads its own cache.\n\n",
+           read_two * 1e-9);
     printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up | CPU efficiency | speed-up "
-           "by CPU time |\n|---|---|---|---|---|---|---|\n");
+           "by CPU time | 2 threads GB/s | of the two-core read BW |\n|---|---|---|---|---|---|---|---|---|\n");
     double *big_out = xmalloc(sizeof(double) * 8192 * 3 * SHL_NCOEFFS(8));
     for (int li = quick ? 2 : 1; li < 3; ++li) {
         const int lmax = lmaxes[li];
@@ -507,11 +550,16 @@ int main(int argc, char **argv)
             }
             const double m1 = bench_median(t1, rounds), m2 = bench_median(t2, rounds), msp = bench_median(sp, rounds);
             const double meff = bench_median(eff, rounds);
-            printf("| %d | %s | %.1f | %.1f | **%.2fx** | %.0f%% | %.2fx |\n", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp,
+            const double bpv = bytes_per_vertex(SHL_INTERP_HERMITE, SHL_NCOEFFS(lmax)), gbs = bpv / m2 * 1e-9;
+            printf("| %d | %s | %.1f | %.1f | **%.2fx** | %.0f%% | %.2fx |", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp,
                    100.0 * meff, 2.0 * meff);
+            if (big)
+                printf(" %.1f | **%.0f%%** |\n", gbs, 100.0 * gbs / (read_two * 1e-9));
+            else
+                printf(" - | - |\n");
             if (csv)
-                fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,,,,,,%.3f\n", lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9,
-                        msp, meff);
+                fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,%.0f,%.3f,%.3f,,,%.3f\n", lmax, big ? "dram" : "l2", isa,
+                        m2 * 1e9, m1 * 1e9, msp, bpv, big ? gbs : 0.0, big ? gbs / (read_two * 1e-9) : 0.0, meff);
             shl_grid_destroy(g);
         }
         shl_ctx_destroy(ctx);

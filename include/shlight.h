@@ -204,7 +204,15 @@ typedef struct shl_grid shl_grid;
 #define SHL_GRID_DOUBLE 1   /* node storage: double */
 /** Largest node count per axis. */
 #define SHL_GRID_RES_MAX 1024
-/** Largest thread count of the threaded entry points. */
+/**
+ * Largest thread count of the threaded entry points.  Their threads (all but the
+ * calling one) come from one process-wide pool: created when a call first needs
+ * them, parked between calls (a call wakes them instead of creating threads, and
+ * does not wait for one that has not started when all the work is taken), joined
+ * at exit; a forked child starts an empty pool.  While one threaded call
+ * runs, a threaded call from another thread runs on its calling thread alone
+ * (same results: they never depend on nthreads).
+ */
 #define SHL_MAX_THREADS 256
 
 /** Bytes per grid node: 3 colours x (value + 3 gradient components) x nc x

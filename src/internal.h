@@ -63,8 +63,9 @@ void shl__free(void *ptr);
 #define SHL__LARGE_ARRAY ((size_t)4 << 20)
 void *shl__calloc_large(size_t count, size_t size);
 /* Failure injection, defined only in a library built with -DSHL_ALLOC_HOOKS (the
- * test runner's and the fuzzers' copies): the N-th allocation (alloc.c) or thread
- * creation (parallel.c) from now fails, N = the value; < 0: never. */
+ * test runner's and the fuzzers' copies): the N-th allocation (alloc.c) or worker
+ * thread a parallel call takes (parallel.c: created, or parked in the pool, as if
+ * created) from now fails, N = the value; < 0: never. */
 extern long shl__alloc_fail_after;
 extern long shl__thread_fail_after;
 #ifdef SHL_ALLOC_HOOKS

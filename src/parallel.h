@@ -12,9 +12,11 @@ int shl__parallel_workers(long n, long grain, int nthreads);
 
 /* Run fn over [0, n) in chunks of `grain` items, claimed in order by the
  * workers (worker 0 is the calling thread; 1 <= nthreads <= SHL_MAX_THREADS;
- * one worker: no thread is created).  Every thread is created before any
- * work starts: if a creation fails, the started threads exit without calling
- * fn, are joined, and SHL_ETHREAD is returned (fn never ran). */
+ * one worker: no thread is involved).  Workers 1.. are the process-wide pool's
+ * parked threads, the missing ones created before any work starts: if a
+ * creation fails, SHL_ETHREAD (fn never ran; the threads created stay parked).
+ * While a call on another thread, or one from inside fn, owns the pool, the
+ * call runs on its calling thread alone (worker 0). */
 int shl__parallel_for(long n, long grain, int nthreads, shl__range_fn fn, void *arg);
 
 /* shl__parallel_for with chunks that shrink as the work runs out: about 1/(4

@@ -9,6 +9,8 @@
 #include "shlight.h"
 #include <pthread.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 enum { NTHREADS = 4, NCASES = 24, LMAX = 8, NC = SHL_NCOEFFS(LMAX) };
 
@@ -187,6 +189,81 @@ SHL_TEST(threads_batch_mt_failures)
     CHECK(bad == 0 && ethread == 12);
     harness_note("%d thread-creation failures handled, nothing written", ethread);
     batch_case_free(&b);
+}
+
+/* ---- the process-wide worker pool (src/parallel.c) ---- */
+
+typedef struct {
+    const batch_case *b;
+    unsigned char v[sizeof(float) * BNC * NS], g[3 * sizeof(float) * BNC * NS];
+    int bad;
+} pool_caller;
+
+static void *pool_caller_main(void *arg)
+{
+    pool_caller *c = arg;
+    for (int k = 0; k < 20; ++k) {
+        c->bad += run_batch(c->b, 0, 2, 1, c->v, c->g) != SHL_OK;
+        c->bad += memcmp(c->v, ref_v, sizeof c->v) != 0 || memcmp(c->g, ref_g, sizeof c->g) != 0;
+    }
+    return NULL;
+}
+
+/* Two threads making 2-thread calls at once (one owns the pool, the other then
+ * runs alone): every result equals the plain call bit for bit. */
+SHL_TEST(threads_pool_concurrent_callers)
+{
+    static batch_case b;
+    static pool_caller callers[2];
+    batch_case_init(&b);
+    CHECK(run_batch(&b, 0, 0, 1, ref_v, ref_g) == SHL_OK);
+    pthread_t th[2];
+    int started = 0;
+    for (int t = 0; t < 2; ++t) {
+        callers[t].b = &b;
+        callers[t].bad = 0;
+        started += pthread_create(&th[t], NULL, pool_caller_main, &callers[t]) == 0;
+    }
+    CHECK(started == 2);
+    for (int t = 0; t < started; ++t) pthread_join(th[t], NULL);
+    CHECK(callers[0].bad == 0 && callers[1].bad == 0);
+    batch_case_free(&b);
+}
+
+#if defined(__SANITIZE_THREAD__)
+#define UNDER_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define UNDER_TSAN 1
+#endif
+#endif
+
+/* A child forked after the pool's workers exist has none of them: its own
+ * 2-thread call starts a new pool and equals the plain call (without the fork
+ * handler it would wait for the parent's workers forever: alarm ends it).
+ * ThreadSanitizer does not allow threads in a child of a threaded process. */
+SHL_TEST(threads_pool_fork_child)
+{
+#ifdef UNDER_TSAN
+    harness_note("skipped under ThreadSanitizer (no threads after a threaded fork)");
+#else
+    batch_case b;
+    batch_case_init(&b);
+    CHECK(run_batch(&b, 0, 0, 1, ref_v, ref_g) == SHL_OK);
+    CHECK(run_batch(&b, 0, 2, 1, got_v, got_g) == SHL_OK);
+    const pid_t pid = fork();
+    if (pid == 0) {
+        alarm(20);
+        const size_t nv = out_bytes(0);
+        const int ok = run_batch(&b, 0, 2, 1, got_v, got_g) == SHL_OK && !memcmp(got_v, ref_v, nv) &&
+                       !memcmp(got_g, ref_g, 3 * nv);
+        _exit(ok ? 0 : 1);
+    }
+    int status = -1;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid);
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    batch_case_free(&b);
+#endif
 }
 
 /* ---- shl__parallel_for_guided (src/parallel.c: the grid interpolation's schedule) ---- */
