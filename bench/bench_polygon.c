@@ -4,7 +4,8 @@
  *  - ZH recurrence vs the monomial-moment baseline (Table 2 "Monomial"),
  *  - speed-up over a frozen copy of the issue-16 kernels (bench/common/poly_baseline.c),
  *  - gradient cost: shl_polygon_grad / shl_polygon, whole call and ZH part (Wu 2020 Table 1),
- *    and central differences (6 shl_polygon calls) / shl_polygon_grad,
+ *    and central differences (7 shl_polygon calls: the coefficients and 6 offsets) /
+ *    shl_polygon_grad, in paired rounds on thread CPU time,
  *  - scalar evaluations per second per core (the SIMD baseline).
  * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
  * CSV rows "grad": ns_total and ns_zh of the gradient calls; "baseline": ns_total of
@@ -18,6 +19,7 @@
 #include "util.h"
 #include <math.h>
 #include <stdlib.h>
+#include <time.h>
 
 enum { NPTS = 64 };
 
@@ -121,11 +123,15 @@ static void run_zh_isa(void *p) /* the context's ISA kernel (shl_polygon's), geo
     bench_sink += zh_buf[1];
 }
 
-static void run_central_diff(void *p) /* gradient by central differences: 6 shl_polygon calls */
+/* What shl_polygon_grad returns, by central differences: the coefficients at x and the
+ * gradient from 6 offset points, 7 shl_polygon calls (the issue's "7 evaluations") */
+static void run_central_diff(void *p)
 {
     job *j = p;
     double acc = 0;
-    for (long i = 0; i < j->inner; ++i)
+    for (long i = 0; i < j->inner; ++i) {
+        shl_polygon(j->ctx, j->pts[i % NPTS], j->verts, j->n, coef_buf);
+        acc += coef_buf[0];
         for (int a = 0; a < 3; ++a)
             for (int sgn = -1; sgn <= 1; sgn += 2) {
                 double x[3] = {j->pts[i % NPTS][0], j->pts[i % NPTS][1], j->pts[i % NPTS][2]};
@@ -133,6 +139,7 @@ static void run_central_diff(void *p) /* gradient by central differences: 6 shl_
                 shl_polygon(j->ctx, x, j->verts, j->n, coef_buf);
                 acc += coef_buf[0];
             }
+    }
     bench_sink += acc;
 }
 
@@ -166,6 +173,52 @@ static double ratio_rounds(int nr, void (*slow)(void *), void (*fast)(void *), j
     *t_slow = bench_median(ts, nr);
     *t_fast = bench_median(tf, nr);
     return bench_median(rs, nr);
+}
+
+/* The gradient section's clock: thread CPU time, so time the thread spends descheduled on a
+ * loaded host is not counted (wall-clock repetitions of one function taken hundreds of ms after
+ * another's made its shl_polygon time disagree with the other sections' by 1.7x). */
+static double thread_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Paired rounds: nf functions, each with its inner count calibrated for ~20 ms; every round
+ * times one repetition of each, in an order rotated from round to round, so all nf of a round
+ * are measured within ~nf x 20 ms of each other.  t[f][r]: seconds per evaluation. */
+enum { PAIR_ROUNDS = 11, PAIR_MAXF = 5 };
+static void paired_rounds(int nf, void (*const fn[])(void *), job *j, double t[][PAIR_ROUNDS])
+{
+    long inner[PAIR_MAXF];
+    for (int f = 0; f < nf; ++f) {
+        j->inner = 1;
+        const double t0 = thread_now();
+        long n = 0;
+        while (thread_now() - t0 < 0.005) { fn[f](j); ++n; }
+        inner[f] = (long)fmax(1.0, 0.02 * n / (thread_now() - t0));
+        j->inner = inner[f];
+        fn[f](j); /* warm-up */
+    }
+    for (int r = 0; r < PAIR_ROUNDS; ++r)
+        for (int i = 0; i < nf; ++i) {
+            const int f = (i + r) % nf;
+            j->inner = inner[f];
+            const double t0 = thread_now();
+            fn[f](j);
+            t[f][r] = (thread_now() - t0) / (double)inner[f];
+        }
+}
+
+/* Median and range over the rounds of t[a][r] / t[b][r]. */
+static double round_ratio(double t[][PAIR_ROUNDS], int a, int b, double *lo, double *hi)
+{
+    double q[PAIR_ROUNDS];
+    for (int r = 0; r < PAIR_ROUNDS; ++r) q[r] = t[a][r] / t[b][r];
+    const double med = bench_median(q, PAIR_ROUNDS); /* sorts q */
+    *lo = q[0], *hi = q[PAIR_ROUNDS - 1];
+    return med;
 }
 
 static void setup(job *j, const shl_ctx *ctx, int n)
@@ -296,8 +349,12 @@ int main(int argc, char **argv)
     printf("\nLeast monomial/recurrence ratio over lmax 2..30: %.2fx\n", worst);
 
     bench_progress("gradient cost (step 5/6)...");
-    printf("\n## Gradient cost (triangle, double; Wu 2020 Table 1; median of 5 interleaved rounds)\n\n");
-    printf("Targets (issue 16): grad/coeffs <= 1.3 at lmax 4 and 8; central differences / analytic >= 5.\n\n");
+    printf("\n## Gradient cost (triangle, double; Wu 2020 Table 1; %d paired rounds, thread CPU time)\n\n", PAIR_ROUNDS);
+    printf("Each round times one ~20 ms repetition of each of the five functions, in an order rotated from\n"
+           "round to round; ratios are medians of the per-round ratios (range in brackets), times medians\n"
+           "over the rounds.  Central differences: 7 shl_polygon calls (coefficients at x, 6 offsets).  ZH part: the scalar ISA's kernels,\n"
+           "geometry precomputed.  Targets (issue 16): grad/coeffs <= 1.3 at lmax 4 and 8; central\n"
+           "differences / analytic >= 5.\n\n");
     printf("| lmax | shl_polygon ns | shl_polygon_grad ns | grad/coeffs | central diff. ns | FD/analytic | ZH recurrence ns | ZH + gradient ns | ratio, ZH part |\n"
            "|---|---|---|---|---|---|---|---|---|\n");
     const int grad_l[4] = {4, 8, 14, 30};
@@ -305,13 +362,17 @@ int main(int argc, char **argv)
         shl_ctx *ctx;
         shl_ctx_create(grad_l[i], &ctx);
         setup(&j, ctx, 3);
-        double tf, tg, tfd, tg2;
-        const double rg = ratio_rounds(5, run_full_grad, run_full, &j, &tg, &tf);
-        const double rfd = ratio_rounds(5, run_central_diff, run_full_grad, &j, &tfd, &tg2);
-        const double tz = timed(run_zh_only, &j), tzg = timed(run_zh_grad_only, &j);
-        printf("| %d | %.0f | %.0f | %.2f | %.0f | %.2f | %.0f | %.0f | %.2f |\n", grad_l[i], tf * 1e9, tg * 1e9, rg,
-               tfd * 1e9, rfd, tz * 1e9, tzg * 1e9, tzg / tz);
-        if (csv) fprintf(csv, "grad,%d,3,%.1f,%.1f,,\n", grad_l[i], tg * 1e9, tzg * 1e9);
+        enum { FULL, GRAD, FD, ZH, ZHGRAD, NF };
+        void (*const fns[NF])(void *) = {run_full, run_full_grad, run_central_diff, run_zh_only, run_zh_grad_only};
+        double t[NF][PAIR_ROUNDS], med[NF], lo[3], hi[3];
+        paired_rounds(NF, fns, &j, t);
+        const double rg = round_ratio(t, GRAD, FULL, &lo[0], &hi[0]), rfd = round_ratio(t, FD, GRAD, &lo[1], &hi[1]);
+        const double rz = round_ratio(t, ZHGRAD, ZH, &lo[2], &hi[2]);
+        for (int f = 0; f < NF; ++f) med[f] = bench_median(t[f], PAIR_ROUNDS);
+        printf("| %d | %.0f | %.0f | %.2f (%.2f-%.2f) | %.0f | %.2f (%.2f-%.2f) | %.0f | %.0f | %.2f (%.2f-%.2f) |\n",
+               grad_l[i], med[FULL] * 1e9, med[GRAD] * 1e9, rg, lo[0], hi[0], med[FD] * 1e9, rfd, lo[1], hi[1],
+               med[ZH] * 1e9, med[ZHGRAD] * 1e9, rz, lo[2], hi[2]);
+        if (csv) fprintf(csv, "grad,%d,3,%.1f,%.1f,,\n", grad_l[i], med[GRAD] * 1e9, med[ZHGRAD] * 1e9);
         shl_ctx_destroy(ctx);
     }
 

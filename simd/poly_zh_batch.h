@@ -82,27 +82,44 @@ void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax,
 enum { NQ = 4 / ZQ };
 typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
 
-/* out row m (index at + step m) = sum_k W[m][k] in[k], W row-major rows x cols */
+/* out rows m0 .. m0 + R - 1 (index at + step m) = sum_k W[m][k] in[k], W row-major with
+ * cols columns: the R rows' sums side by side (R independent add chains instead of one) */
+__attribute__((always_inline)) static inline void quad_rows(const double *w, int m0, const int R, int cols,
+                                                            const zq (*in)[NQ], const zq (*scale)[NQ],
+                                                            double *coeffs, double *grad, int nc, int at, int step)
+{
+    enum { RMAX = 4 };
+    zq acc[RMAX][NQ];
+    memset(acc, 0, sizeof acc);
+    for (int k = 0; k < cols; ++k)
+#pragma GCC unroll 4
+        for (int r = 0; r < R; ++r) {
+            const double wk = w[(m0 + r) * cols + k];
+            for (int q = 0; q < NQ; ++q) acc[r][q] += wk * in[k][q];
+        }
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r) {
+        double t[4];
+        for (int q = 0; q < NQ; ++q) {
+            if (scale) acc[r][q] = acc[r][q] * scale[0][q] * scale[1][q];
+            memcpy(t + q * ZQ, &acc[r][q], sizeof acc[r][q]);
+        }
+        const int i = at + step * (m0 + r);
+        coeffs[i] = t[0], grad[i] = t[1], grad[nc + i] = t[2], grad[2 * nc + i] = t[3];
+    }
+}
+
+/* out row m (index at + step m) = sum_k W[m][k] in[k], W row-major rows x cols; rows four at a time */
 __attribute__((always_inline)) static inline void quad_matvec(const double *w, int rows, int cols,
                                                               const zq (*in)[NQ], const zq (*scale)[NQ],
                                                               double *coeffs, double *grad, int nc, int at,
                                                               int step)
 {
-    for (int m = 0; m < rows; ++m) {
-        zq acc[NQ];
-        memset(acc, 0, sizeof acc);
-        for (int k = 0; k < cols; ++k) {
-            const double wk = w[m * cols + k];
-            for (int q = 0; q < NQ; ++q) acc[q] += wk * in[k][q];
-        }
-        double t[4];
-        for (int q = 0; q < NQ; ++q) {
-            if (scale) acc[q] = acc[q] * scale[0][q] * scale[1][q];
-            memcpy(t + q * ZQ, &acc[q], sizeof acc[q]);
-        }
-        const int i = at + step * m;
-        coeffs[i] = t[0], grad[i] = t[1], grad[nc + i] = t[2], grad[2 * nc + i] = t[3];
-    }
+    int m = 0;
+    for (; m + 4 <= rows; m += 4) quad_rows(w, m, 4, cols, in, scale, coeffs, grad, nc, at, step);
+    if (rows - m == 3) quad_rows(w, m, 3, cols, in, scale, coeffs, grad, nc, at, step);
+    if (rows - m == 2) quad_rows(w, m, 2, cols, in, scale, coeffs, grad, nc, at, step);
+    if (rows - m == 1) quad_rows(w, m, 1, cols, in, scale, coeffs, grad, nc, at, step);
 }
 
 /* The gradient rows are multiplied by grad_scale[0], then grad_scale[1], as

@@ -13,19 +13,22 @@
 #define gv_edges GV_CAT(gv_edges_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
 
-/* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes side by side in each band step,
- * as simd/poly_zh_coeff.h does for the coefficients: their recurrences are independent, so
- * the G dependency chains overlap.  Every bsum[l] and gsum[ax][l] still adds the edges in
- * order (Eq. 14; Wu Eq. 11, 29), so the bits equal one edge at a time. */
+/* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes, in two sweeps over the bands.
+ * The first is the coefficient recurrence (as simd/poly_zh_coeff.h: the G edges side by
+ * side in each band step, so their chains overlap), which also keeps P_l(a_e), dP_l and
+ * D_l of every band; the second runs Wu's I_l, J_l recurrence from them and adds mu_e I_l
+ * into the gradient sums.  One sweep carrying both recurrences held ~20 vectors per edge
+ * live and spilled them every band.  Every bsum[l] and gsum[ax][l] still adds the edges in
+ * order (Eq. 14; Wu Eq. 11, 29) and every value is the same expression, so the bits equal
+ * one edge and one sweep at a time. */
 __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
                                                            gv ux, gv uy, gv uz, const shl__zh_band_consts *bc,
                                                            gv *bsum, gv (*gsum)[SHL_LMAX_MAX + 1])
 {
     enum { GMAX = 3 };
-    gv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX], v[GMAX], i0[GMAX], fp1[GMAX];
+    gv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX];
     gv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
-    gv i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX], pl[GMAX], dpl[GMAX], dl[GMAX];
-    double m[3][GMAX]; /* mu_e, the weight of edge e's I_l in the gradient */
+    gv pl[GMAX][SHL_LMAX_MAX + 1], dpl[GMAX][SHL_LMAX_MAX + 1], dl[GMAX][SHL_LMAX_MAX + 1]; /* bands 2..lmax */
 #pragma GCC unroll 3
     for (int k = 0; k < G; ++k) {
         const int e = e0 + k, f = (e + 1 == g->n) ? 0 : e + 1;
@@ -44,33 +47,16 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
         d_lm1[k] = gamma, d_lm2[k] = gv_set1(0.0);   /* D_1, D_0 (Eq. 28) */
         bsum[0] += c[k] * gamma;
         if (lmax >= 2) bsum[1] += c[k] * b1[k];
-        i0[k] = gv_set1(g->f_integral[e]), fp1[k] = gv_set1(g->fprime1[e]);
-        v[k] = gv_dot(ux, uy, uz, g->gvec[e]);
-        /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-        i_lm1[k] = (v[k] * gamma - (fp1[k] * da[k] - i0[k] * a[k])) * gv_set1(0.5); /* I_1 */
-        j_lm1[k] = i0[k], j_lm2[k] = gv_set1(0.0);                                 /* J_1, J_0 = 0 */
-        for (int ax = 0; ax < 3; ++ax) m[ax][k] = g->mu[e][ax];
     }
-    for (int ax = 0; ax < 3; ++ax) /* Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
-        for (int k = 0; k < G; ++k) {
-            gsum[ax][0] += gv_set1(m[ax][k]) * i0[k];
-            if (lmax >= 1) gsum[ax][1] += gv_set1(m[ax][k]) * i_lm1[k];
-        }
     for (int l = 2; l <= lmax; ++l) {
         const gv rl = gv_set1(bc->inv_l[l]), lm1 = gv_set1(bc->l_m1[l]), tlm1 = gv_set1(bc->twol_m1[l]);
-        const gv rl1 = gv_set1(bc->inv_l[l + 1]);
 #pragma GCC unroll 3
         for (int k = 0; k < G; ++k) {
-            pl[k] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-            dl[k] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+            pl[k][l] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
+            dl[k][l] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
             /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-            dpl[k] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
-            const gv il = (v[k] * dl[k] - j_lm1[k] - (fp1[k] * dpl[k] - i0[k] * pl[k])) * rl1;
-            const gv jl = tlm1 * i_lm1[k] + j_lm2[k];
-            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+            dpl[k][l] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
         }
-        for (int ax = 0; ax < 3; ++ax)
-            for (int k = 0; k < G; ++k) gsum[ax][l] += gv_set1(m[ax][k]) * i_lm1[k];
         if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
 #pragma GCC unroll 3
         for (int k = 0; k < G; ++k) {
@@ -79,9 +65,27 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
             const gv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
             b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
             bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
-            p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k];
-            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k];
-            d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k];
+            p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k][l];
+            dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k][l];
+            d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k][l];
+        }
+    }
+    /* Wu's recurrence (polygon_zh.h) one edge at a time (its chain is short; G edges' state
+     * would not fit the registers), then Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+    for (int k = 0; k < G; ++k) {
+        const int e = e0 + k;
+        const gv i0 = gv_set1(g->f_integral[e]), fp1 = gv_set1(g->fprime1[e]), v = gv_dot(ux, uy, uz, g->gvec[e]);
+        const gv mx = gv_set1(g->mu[e][0]), my = gv_set1(g->mu[e][1]), mz = gv_set1(g->mu[e][2]);
+        /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
+        gv i_lm1 = (v * gv_set1(g->gamma[e]) - (fp1 * da[k] - i0 * a[k])) * gv_set1(0.5); /* I_1 */
+        gv j_lm1 = i0, j_lm2 = gv_set1(0.0);                                              /* J_1, J_0 = 0 */
+        gsum[0][0] += mx * i0, gsum[1][0] += my * i0, gsum[2][0] += mz * i0;
+        if (lmax >= 1) gsum[0][1] += mx * i_lm1, gsum[1][1] += my * i_lm1, gsum[2][1] += mz * i_lm1;
+        for (int l = 2; l <= lmax; ++l) {
+            const gv il = (v * dl[k][l] - j_lm1 - (fp1 * dpl[k][l] - i0 * pl[k][l])) * gv_set1(bc->inv_l[l + 1]);
+            const gv jl = gv_set1(bc->twol_m1[l]) * i_lm1 + j_lm2;
+            j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
+            gsum[0][l] += mx * il, gsum[1][l] += my * il, gsum[2][l] += mz * il;
         }
     }
 }
@@ -122,12 +126,17 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
     if (zh4) {
         for (int l = 0; l <= lmax; ++l) {
             const gv kl = gv_set1(bc->norm[l]), kg = gv_set1(bc->norm[l] * gscale);
-            double t[4][GW];
-            gv_scatter(kl * surf[l], t[0], 1, GW); /* Eq. 13 */
-            for (int ax = 0; ax < 3; ++ax) gv_scatter(kg * gsum[ax][l], t[1 + ax], 1, GW);
+            const gv z = kl * surf[l], zx = kg * gsum[0][l], zy = kg * gsum[1][l], zz = kg * gsum[2][l]; /* Eq. 13 */
             double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
-            for (int k = 0; k < cnt; ++k)
-                for (int b = 0; b < 4; ++b) o[4 * k + b] = t[b][k];
+            /* lane k of the 4 vectors side by side, k a constant after unrolling: a shuffle
+             * in the registers (with k a variable, or through a stack array, gcc stored the
+             * vectors and loaded them back in pieces, a fifth of this kernel's time) */
+#pragma GCC unroll 8
+            for (int k = 0; k < GW; ++k)
+                if (k < cnt) {
+                    const double q[4] = {z[k], zx[k], zy[k], zz[k]};
+                    memcpy(o + 4 * k, q, sizeof q);
+                }
         }
         return;
     }
