@@ -42,6 +42,7 @@ typedef __m512d vd;
 static inline vd vd_set1(double a) { return _mm512_set1_pd(a); }
 static inline vd vd_load_float(const float *p) { return _mm512_cvtps_pd(_mm256_loadu_ps(p)); } /* p[0..7] widened */
 static inline void vd_store(double *p, vd a) { _mm512_storeu_pd(p, a); }
+static inline vd vd_add(vd a, vd b) { return _mm512_add_pd(a, b); }
 static inline vd vd_mul(vd a, vd b) { return _mm512_mul_pd(a, b); }
 static inline vd vd_fma(vd a, vd b, vd c) { return _mm512_fmadd_pd(a, b, c); }
 /* Rows shorter than 8 doubles (lmax 1: 4 coefficients) take the avx2 kernel

@@ -41,6 +41,7 @@ typedef float64x2_t vd;
 static inline vd vd_set1(double a) { return vdupq_n_f64(a); }
 static inline vd vd_load_float(const float *p) { return vcvt_f64_f32(vld1_f32(p)); } /* p[0..1] widened */
 static inline void vd_store(double *p, vd a) { vst1q_f64(p, a); }
+static inline vd vd_add(vd a, vd b) { return vaddq_f64(a, b); }
 static inline vd vd_mul(vd a, vd b) { return vmulq_f64(a, b); }
 static inline vd vd_fma(vd a, vd b, vd c) { return vfmaq_f64(c, a, b); }
 
