@@ -11,8 +11,8 @@
  * CSV rows "lmax": ns_zh = set-up + ZH recurrence as shl_polygon runs them, ns_rotation the
  * reconstruction (the whole call minus those); "grad": ns_total and ns_zh of the gradient
  * calls; "baseline": ns_total of shl_polygon, ns_zh of the frozen baseline pipeline;
- * "zhmono": ns_zh of the scalar-ISA ZH kernel, ns_rotation of the context's ISA kernel, ns_monomial_total
- * of the monomial baseline (ZH part only). */
+ * "zhmono": ns_zh of the scalar-ISA ZH kernel, ns_rotation of the context's ISA kernel,
+ * ns_monomial_total of the monomial baseline (ZH part only). */
 #include "monomial.h"
 #include "poly_baseline.h"
 #include "polygon.h"
