@@ -1,5 +1,6 @@
 /* Polygon-light coefficient benchmark (Wang & Ramamoorthi 2018):
- *  - time per evaluation vs lmax with the ZH-recurrence / rotation split (Fig. 6),
+ *  - time per evaluation vs lmax split into shl_polygon's stages (Fig. 6): set-up, ZH
+ *    recurrence (the context's ISA kernel) and reconstruction (rotation),
  *  - time vs number of edges (Fig. 7), with fitted exponents,
  *  - ZH recurrence vs the monomial-moment baseline (Table 2 "Monomial"),
  *  - speed-up over a frozen copy of the issue-16 kernels (bench/common/poly_baseline.c),
@@ -8,10 +9,11 @@
  *    shl_polygon_grad, in paired rounds on thread CPU time,
  *  - scalar evaluations per second per core (the SIMD baseline).
  * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
- * CSV rows "grad": ns_total and ns_zh of the gradient calls; "baseline": ns_total of
- * shl_polygon, ns_zh of the frozen baseline pipeline; "zhmono": ns_zh of the
- * scalar-ISA ZH kernel, ns_rotation of the context's ISA kernel, ns_monomial_total
- * of the monomial baseline (ZH part only). */
+ * CSV rows "lmax": ns_zh = set-up + ZH recurrence as shl_polygon runs them, ns_rotation the
+ * reconstruction (the whole call minus those); "grad": ns_total and ns_zh of the gradient
+ * calls; "baseline": ns_total of shl_polygon, ns_zh of the frozen baseline pipeline;
+ * "zhmono": ns_zh of the scalar-ISA ZH kernel, ns_rotation of the context's ISA kernel,
+ * ns_monomial_total of the monomial baseline (ZH part only). */
 #include "monomial.h"
 #include "poly_baseline.h"
 #include "polygon.h"
@@ -58,23 +60,22 @@ static void run_full_f(void *p)
     bench_sink += acc;
 }
 
-static void run_geom_zh(void *p) /* per-edge setup + ZH recurrence */
+static void run_setup(void *p) /* shl_polygon's set-up (the geometry without gradient terms) */
 {
     job *j = p;
     for (long i = 0; i < j->inner; ++i) {
-        shl__poly_geom_init(&j->geom[0], j->pts[i % NPTS], j->verts, j->n);
-        shl__poly_zh_d(&j->geom[0], j->lmax, zh_buf);
-        bench_sink += zh_buf[1];
+        shl__poly_geom_init_values(&j->geom[0], j->pts[i % NPTS], j->verts, j->n);
+        bench_sink += j->geom[0].solid_angle;
     }
 }
 
-static void run_rotation(void *p)
+static void run_geom_zh(void *p) /* shl_polygon's set-up + ZH recurrence (the context's ISA kernel) */
 {
     job *j = p;
     for (long i = 0; i < j->inner; ++i) {
-        zh_buf[0] += 1e-300; /* a dependency so the call is not hoisted */
-        shl__zh_to_sh(j->lmax, zh_buf, coef_buf);
-        bench_sink += coef_buf[1];
+        shl__poly_geom_init_values(&j->geom[0], j->pts[i % NPTS], j->verts, j->n);
+        j->ctx->isa->poly_zh(&j->geom[0], j->lmax, zh_buf);
+        bench_sink += zh_buf[1];
     }
 }
 
@@ -264,7 +265,11 @@ int main(int argc, char **argv)
 
     bench_progress("time vs lmax (step 1/6)...");
     printf("\n## Time per evaluation vs lmax (triangle light, double; Wang 2018 Fig. 6)\n\n");
-    printf("| lmax | coeffs | total ns | setup+ZH recurrence ns | rotation ns | ns/coeff |\n|---|---|---|---|---|---|\n");
+    printf("shl_polygon's stages as it runs them (medians of 5 interleaved rounds): set-up\n"
+           "(shl__poly_geom_init_values), ZH recurrence (the context's ISA kernel poly_zh: set-up + ZH minus\n"
+           "set-up), reconstruction (the rest of poly_sh: the total minus set-up + ZH).\n\n");
+    printf("| lmax | coeffs | total ns | set-up ns | ZH recurrence ns | rotation ns | ns/coeff |\n"
+           "|---|---|---|---|---|---|---|\n");
     const int lmaxes[] = {2, 4, 6, 8, 10, 12, 14, 18, 22, 26, 30};
     double xs[16], ys[16];
     int nl = 0;
@@ -272,9 +277,14 @@ int main(int argc, char **argv)
         shl_ctx *ctx;
         shl_ctx_create(lmaxes[i], &ctx);
         setup(&j, ctx, 3);
-        const double t = timed(run_full, &j), tz = timed(run_geom_zh, &j), tr = timed(run_rotation, &j);
+        enum { NR = 5 }; /* interleaved rounds: the stages are differences of medians */
+        double rt[NR], rs[NR], rz[NR];
+        for (int r = 0; r < NR; ++r)
+            rt[r] = timed(run_full, &j), rs[r] = timed(run_setup, &j), rz[r] = timed(run_geom_zh, &j);
+        const double t = bench_median(rt, NR), ts = bench_median(rs, NR), tz = bench_median(rz, NR), tr = t - tz;
         const int nc = SHL_NCOEFFS(lmaxes[i]);
-        printf("| %d | %d | %.0f | %.0f | %.0f | %.1f |\n", lmaxes[i], nc, t * 1e9, tz * 1e9, tr * 1e9, t * 1e9 / nc);
+        printf("| %d | %d | %.0f | %.0f | %.0f | %.0f | %.1f |\n", lmaxes[i], nc, t * 1e9, ts * 1e9, (tz - ts) * 1e9,
+               tr * 1e9, t * 1e9 / nc);
         if (csv) fprintf(csv, "lmax,%d,3,%.1f,%.1f,%.1f,\n", lmaxes[i], t * 1e9, tz * 1e9, tr * 1e9);
         if (lmaxes[i] >= 4) { xs[nl] = nc; ys[nl] = t; ++nl; }
         shl_ctx_destroy(ctx);

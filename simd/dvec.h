@@ -1,6 +1,6 @@
 /* Generic double vectors of W = 2, 4 and 8 lanes for the single-call polygon kernels
  * (poly_zh_coeff.h, poly_zh_grad.h, poly_hess_batch.h): the type dvW and its verbs
- * dvW_set1, dvW_dot (u . p per lane as (u0 p0 + u1 p1) + u2 p2, the order of the one-lobe
+ * dvW_set1, dvW_load (W doubles, any alignment), dvW_dot (u . p per lane as (u0 p0 + u1 p1) + u2 p2, the order of the one-lobe
  * recurrence of src/polygon_zh.h) and dvW_scatter (the first count lanes, stride apart).
  * Widths above 2 only up to the ISA's double width SHL_VDLEN: a wider generic vector
  * would be passed in memory, with a different ABI (gcc's -Wpsabi). */
@@ -34,6 +34,12 @@
     static inline dv##W dv##W##_dot(dv##W ux, dv##W uy, dv##W uz, const double p[3])                  \
     {                                                                                                  \
         return ux * dv##W##_set1(p[0]) + uy * dv##W##_set1(p[1]) + uz * dv##W##_set1(p[2]);            \
+    }                                                                                                  \
+    static inline dv##W dv##W##_load(const double *p)                                                 \
+    {                                                                                                  \
+        dv##W v;                                                                                       \
+        memcpy(&v, p, sizeof v);                                                                       \
+        return v;                                                                                      \
     }                                                                                                  \
     static inline void dv##W##_scatter(dv##W v, double *out, ptrdiff_t stride, int count)              \
     {                                                                                                  \

@@ -118,6 +118,9 @@ typedef void (*shl__sphere_batch_fn)(int lmax, const double center[3], double ra
  * shl__poly_zh_grad_d (src/polygon.h), results equal to theirs. */
 struct shl__poly_geom;
 typedef void (*shl__poly_zh_fn)(const struct shl__poly_geom *g, int lmax, double *zh);
+/* shl_polygon after the set-up: the ZH integrals of shl__poly_zh_d reconstructed as by
+ * shl__zh_to_sh, results equal to theirs. */
+typedef void (*shl__poly_sh_fn)(const struct shl__poly_geom *g, int lmax, double *coeffs);
 /* shl_polygon_grad after the set-up: coefficients and gradient (unscaled) from the ZH
  * integrals of shl__poly_zh_grad_d reconstructed as by shl__zh_to_sh, results equal to theirs. */
 typedef void (*shl__poly_grad_sh_fn)(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc);
@@ -137,8 +140,9 @@ struct shl__isa {
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
-    shl__poly_zh_fn poly_zh;           /* shl_polygon (simd/poly_zh_batch.h) */
+    shl__poly_zh_fn poly_zh;           /* shl_polygon's ZH integrals (simd/poly_zh_batch.h) */
     shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
+    shl__poly_sh_fn poly_sh;           /* shl_polygon: poly_zh, then the reconstruction */
     shl__poly_hess_fn poly_hess;            /* shl_polygon_hess (simd/poly_hess_batch.h) */
 };
 
@@ -162,6 +166,7 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
     void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc); \
+    void shl__poly_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs);                \
     void shl__poly_hess_##isa(const struct shl__poly_geom *g, int lmax, int unscaled, double *const *out);
 
 #endif

@@ -18,6 +18,11 @@
 #include "dvec.h" /* also: no FMA contraction, every ISA rounds as the scalar one */
 
 #define ZW SHL_DVEC_WIDTH
+#define ZV_CAT2(a, b) a##b
+#define ZV_CAT(a, b) ZV_CAT2(a, b)
+#define zv ZV_CAT(dv, ZW) /* simd/dvec.h's full-width vector and its verbs */
+#define zv_set1 ZV_CAT(zv, _set1)
+#define zv_load ZV_CAT(zv, _load)
 /* Every lobe of zh_lanes' outputs (gv_block of simd/poly_zh_grad.h): blocks of ZW lobes, a
  * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors (as shl__poly_zh below). */
 #define GV_BLOCK2(w) gv_block_##w
@@ -208,4 +213,58 @@ void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, doub
 #endif
     if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
     for (int d0 = 0; d0 < full; d0 += ZW) CW_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh);
+}
+
+/* out[at + step m] = sum_k W[m][k] in[k] for the rows m < rows of a transposed block of
+ * shl__zh_lobe_blocks: 2 ZW rows per pass over k (two independent sums), then ZW, then 2
+ * (the padded column holds an even count); every coefficient is the sum over k = 0, 1, ...
+ * in order, as in shl__zh_to_sh, so the results are its bits. */
+__attribute__((always_inline)) static inline void sh_matvec(const double *wt, int rows, int cols, const double *in,
+                                                            double *out, int at, int step)
+{
+    const int padded = rows + (rows & 1); /* doubles per column */
+    int r = 0;
+    for (; r + 2 * ZW <= padded; r += 2 * ZW) {
+        zv acc0 = zv_set1(0.0), acc1 = acc0;
+        for (int k = 0; k < cols; ++k) {
+            const zv x = zv_set1(in[k]);
+            acc0 += zv_load(wt + (ptrdiff_t)k * padded + r) * x;
+            acc1 += zv_load(wt + (ptrdiff_t)k * padded + r + ZW) * x;
+        }
+        /* lane reads, not a memcpy: with one gcc 12 kept the sums in memory */
+        for (int j = 0; j < ZW; ++j) out[at + step * (r + j)] = acc0[j];
+        for (int j = 0; j < ZW && r + ZW + j < rows; ++j) out[at + step * (r + ZW + j)] = acc1[j];
+    }
+    for (; r + ZW <= padded; r += ZW) {
+        zv acc = zv_set1(0.0);
+        for (int k = 0; k < cols; ++k) acc += zv_load(wt + (ptrdiff_t)k * padded + r) * zv_set1(in[k]);
+        for (int j = 0; j < ZW && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+    }
+    for (; r < padded; r += 2) { /* ZW > 2 only */
+        dv2 acc = dv2_set1(0.0);
+        for (int k = 0; k < cols; ++k) acc += dv2_load(wt + (ptrdiff_t)k * padded + r) * dv2_set1(in[k]);
+        for (int j = 0; j < 2 && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+    }
+}
+
+/* shl_polygon after the set-up: the ZH integrals of shl__poly_zh above reconstructed as by
+ * shl__zh_to_sh (Wang 2018 Eq. 33 with the lobe pairs of src/zh_lobes.c), its weights on
+ * ZW rows per vector instead of 2. */
+void SHL_ISA_SUFFIX(shl__poly_sh)(const struct shl__poly_geom *g, int lmax, double *coeffs)
+{
+    double zh[SHL__ZH_BLOCK];
+    SHL_ISA_SUFFIX(shl__poly_zh)(g, lmax, zh);
+    shl__zh_blocks w;
+    shl__zh_lobe_blocks(&w);
+    for (int l = 0; l <= lmax; ++l) {
+        double even[SHL_LMAX_MAX + 1], odd[SHL_LMAX_MAX + 1];
+        even[0] = zh[l];
+        for (int k = 1; k <= l; ++k) {
+            const double z1 = zh[l + (ptrdiff_t)(2 * k - 1) * SHL__ZH_STRIDE], z2 = zh[l + (ptrdiff_t)(2 * k) * SHL__ZH_STRIDE];
+            even[k] = z1 + z2;
+            odd[k - 1] = z1 - z2;
+        }
+        sh_matvec(w.even + 2 * (ptrdiff_t)w.even_at[l], l + 1, l + 1, even, coeffs, l * (l + 1), 1);
+        if (l > 0) sh_matvec(w.odd + 2 * (ptrdiff_t)w.odd_at[l], l, l, odd, coeffs, l * (l + 1) - 1, -1);
+    }
 }

@@ -68,6 +68,7 @@ static const shl__isa isas[] = {
         .accumulate = shl__accumulate_##isa,                                                           \
         .poly_zh = shl__poly_zh_##isa,                                                                 \
         .poly_grad_sh = shl__poly_grad_sh_##isa,                                                       \
+        .poly_sh = shl__poly_sh_##isa,                                                                 \
         .poly_hess = shl__poly_hess_##isa,                                                             \
     },
 #include "../simd/isa_list.h"

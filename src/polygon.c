@@ -663,10 +663,8 @@ int shl_polygon(const shl_ctx *ctx, const double x[3], const double *verts, int 
     if (st) return st;
     if (shl__check_finite(x, 3) || shl__check_finite(verts, 3 * n)) return SHL_ENONFINITE;
     shl__poly_geom g;
-    double zh[SHL__ZH_BLOCK];
     shl__poly_geom_init_values(&g, x, verts, n);
-    ctx->isa->poly_zh(&g, ctx->lmax, zh);
-    shl__zh_to_sh(ctx->lmax, zh, coeffs);
+    ctx->isa->poly_sh(&g, ctx->lmax, coeffs);
     return SHL_OK;
 }
 

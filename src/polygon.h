@@ -90,6 +90,15 @@ void shl__zh_to_sh(int lmax, const double *zh, double *coeffs);
 /* shl__zh_to_sh of each of the SHL__ZH_MULTI interleaved blocks of z10 (layout above)
  * into out[b], bit for bit, the blocks side by side (polygon_hess.c). */
 void shl__zh_to_sh_multi(int lmax, const double *z10, double *const out[SHL__ZH_MULTI]);
+/* shl__zh_to_sh's transposed weight blocks, for the ISA kernels (simd/poly_zh_batch.h): band
+ * l's even block (l+1 rows and columns) starts at even + 2 even_at[l], its odd block (l rows
+ * and columns) at odd + 2 odd_at[l]; column k of a block of r rows is the r + (r & 1) doubles
+ * from (r + (r & 1)) k on: rows 0 .. r-1, then a zero where r is odd. */
+typedef struct {
+    const double *even, *odd;
+    const int *even_at, *odd_at;
+} shl__zh_blocks;
+void shl__zh_lobe_blocks(shl__zh_blocks *b);
 /* Float ZH in, float SH out; accumulates in double. */
 void shl__zh_to_sh_f(int lmax, const float *zh, float *coeffs);
 

@@ -103,6 +103,13 @@ static inline void to_sh(int lmax, const double *zh, const float *zh_f, double *
     }
 }
 
+void shl__zh_lobe_blocks(shl__zh_blocks *b)
+{
+    pthread_once(&tables_once, make_tables);
+    b->even = (const double *)even_t, b->odd = (const double *)odd_t;
+    b->even_at = even_at, b->odd_at = odd_at;
+}
+
 void shl__zh_to_sh(int lmax, const double *zh, double *coeffs)
 {
     to_sh(lmax, zh, NULL, coeffs);
