@@ -11,7 +11,15 @@
 #define gv_dot GV_CAT(gv, _dot)
 #define gv_scatter GV_CAT(gv, _scatter)
 #define gv_edges GV_CAT(gv_edges_, GW)
+#define gv_accumulate GV_CAT(gv_accumulate_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
+
+/* *sum += x; fresh: *sum = 0 + x (the sum's first term: no zeroing pass, and 0 + x keeps the
+ * bits of adding x to a zeroed sum, -0 included) */
+__attribute__((always_inline)) static inline void gv_accumulate(gv *sum, gv x, const int fresh)
+{
+    *sum = fresh ? gv_set1(0.0) + x : *sum + x;
+}
 
 /* The edges e0 .. e0 + G - 1 (G <= 3) of one block of lobes, in two sweeps over the bands.
  * The first is the coefficient recurrence (as simd/poly_zh_coeff.h: the G edges side by
@@ -20,10 +28,11 @@
  * into the gradient sums.  One sweep carrying both recurrences held ~20 vectors per edge
  * live and spilled them every band.  Every bsum[l] and gsum[ax][l] still adds the edges in
  * order (Eq. 14; Wu Eq. 11, 29) and every value is the same expression, so the bits equal
- * one edge and one sweep at a time. */
+ * one edge and one sweep at a time.  first: edge e0 starts the sums (they are not zeroed
+ * before; gcc zeroed them with a memset call, ~4% of shl_polygon_grad). */
 __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom *g, int e0, const int G, int lmax,
                                                            gv ux, gv uy, gv uz, const shl__zh_band_consts *bc,
-                                                           gv *bsum, gv (*gsum)[SHL_LMAX_MAX + 1])
+                                                           gv *bsum, gv (*gsum)[SHL_LMAX_MAX + 1], const int first)
 {
     enum { GMAX = 3 };
     gv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX];
@@ -45,8 +54,9 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
         dp_lm1[k] = da[k], dp_lm2[k] = gv_set1(0.0); /* dP_{l-1}, dP_{l-2} */
         b_lm1[k] = b1[k], b_lm2[k] = gamma;          /* B_1, B_0 (Eq. 26-27) */
         d_lm1[k] = gamma, d_lm2[k] = gv_set1(0.0);   /* D_1, D_0 (Eq. 28) */
-        bsum[0] += c[k] * gamma;
-        if (lmax >= 2) bsum[1] += c[k] * b1[k];
+        const int fresh = first && k == 0; /* the first edge starts the sums */
+        gv_accumulate(&bsum[0], c[k] * gamma, fresh);
+        if (lmax >= 2) gv_accumulate(&bsum[1], c[k] * b1[k], fresh);
     }
     for (int l = 2; l <= lmax; ++l) {
         const gv rl = gv_set1(bc->inv_l[l]), lm1 = gv_set1(bc->l_m1[l]), tlm1 = gv_set1(bc->twol_m1[l]);
@@ -64,7 +74,7 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
             const gv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
             const gv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
             b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
-            bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
+            gv_accumulate(&bsum[l], c[k] * bl, first && k == 0); /* Eq. 14, edges in order */
             p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k][l];
             dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl[k][l];
             d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k][l];
@@ -79,13 +89,19 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
         /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
         gv i_lm1 = (v * gv_set1(g->gamma[e]) - (fp1 * da[k] - i0 * a[k])) * gv_set1(0.5); /* I_1 */
         gv j_lm1 = i0, j_lm2 = gv_set1(0.0);                                              /* J_1, J_0 = 0 */
-        gsum[0][0] += mx * i0, gsum[1][0] += my * i0, gsum[2][0] += mz * i0;
-        if (lmax >= 1) gsum[0][1] += mx * i_lm1, gsum[1][1] += my * i_lm1, gsum[2][1] += mz * i_lm1;
+        const int fresh = first && k == 0;
+        gv_accumulate(&gsum[0][0], mx * i0, fresh), gv_accumulate(&gsum[1][0], my * i0, fresh);
+        gv_accumulate(&gsum[2][0], mz * i0, fresh);
+        if (lmax >= 1) {
+            gv_accumulate(&gsum[0][1], mx * i_lm1, fresh), gv_accumulate(&gsum[1][1], my * i_lm1, fresh);
+            gv_accumulate(&gsum[2][1], mz * i_lm1, fresh);
+        }
         for (int l = 2; l <= lmax; ++l) {
             const gv il = (v * dl[k][l] - j_lm1 - (fp1 * dpl[k][l] - i0 * pl[k][l])) * gv_set1(bc->inv_l[l + 1]);
             const gv jl = gv_set1(bc->twol_m1[l]) * i_lm1 + j_lm2;
             j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-            gsum[0][l] += mx * il, gsum[1][l] += my * il, gsum[2][l] += mz * il;
+            gv_accumulate(&gsum[0][l], mx * il, fresh), gv_accumulate(&gsum[1][l], my * il, fresh);
+            gv_accumulate(&gsum[2][l], mz * il, fresh);
         }
     }
 }
@@ -107,16 +123,25 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
     memcpy(&uy, t[1], sizeof uy);
     memcpy(&uz, t[2], sizeof uz);
     gv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
-    for (int l = 0; l <= lmax; ++l) bsum[l] = gv_set1(0.0);
-    for (int a = 0; a < 3; ++a)
-        for (int l = 0; l <= lmax; ++l) gsum[a][l] = gv_set1(0.0);
-    for (int e0 = 0; e0 < n;) { /* n >= 3: groups of 3, of 2 where 2 or 4 are left */
+    /* n = 0 (no polygon left, polygon.c: all sums 0) or n >= 3: groups of 3, of 2 where 2 or 4
+     * are left; the first group starts the sums */
+    int e0 = 0;
+    if (n == 0) {
+        for (int l = 0; l <= lmax; ++l) bsum[l] = gsum[0][l] = gsum[1][l] = gsum[2][l] = gv_set1(0.0);
+    } else if (n == 4) {
+        gv_edges(g, 0, 2, lmax, ux, uy, uz, bc, bsum, gsum, 1);
+        e0 = 2;
+    } else {
+        gv_edges(g, 0, 3, lmax, ux, uy, uz, bc, bsum, gsum, 1);
+        e0 = 3;
+    }
+    while (e0 < n) {
         const int rest = n - e0;
         if (rest == 2 || rest == 4) {
-            gv_edges(g, e0, 2, lmax, ux, uy, uz, bc, bsum, gsum);
+            gv_edges(g, e0, 2, lmax, ux, uy, uz, bc, bsum, gsum, 0);
             e0 += 2;
         } else {
-            gv_edges(g, e0, 3, lmax, ux, uy, uz, bc, bsum, gsum);
+            gv_edges(g, e0, 3, lmax, ux, uy, uz, bc, bsum, gsum, 0);
             e0 += 3;
         }
     }
@@ -150,6 +175,7 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
 
 #undef gv_block
 #undef gv_edges
+#undef gv_accumulate
 #undef gv_scatter
 #undef gv_dot
 #undef gv_set1
