@@ -19,7 +19,7 @@ int framebuf_init(framebuf *fb, int w, int h)
     fb->tri = malloc(sizeof(int) * n);
     fb->bary = malloc(sizeof(float) * 3 * n);
     fb->back = malloc(n);
-    for (int i = 0; i < 5; ++i) {
+    for (int i = 0; i < 4; ++i) {
         fb->work[i] = NULL;
         fb->work_len[i] = 0;
     }
@@ -35,7 +35,7 @@ void framebuf_free(framebuf *fb)
     free(fb->tri);
     free(fb->bary);
     free(fb->back);
-    for (int i = 0; i < 5; ++i) free(fb->work[i]);
+    for (int i = 0; i < 4; ++i) free(fb->work[i]);
     memset(fb, 0, sizeof *fb);
 }
 
@@ -77,12 +77,11 @@ typedef struct {
     int keyed;        /* the frame fits the keys' shorts */
     int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
     long maxlist;     /* longest tile list */
-    void *tile_buf;   /* per worker: 4 maxlist words (sort_list), then maxlist records (a tile's, in order) */
+    void *tile_buf;   /* per worker: 3 maxlist words (sort_order), the maxlist-long order, then maxlist records (a tile's, in list order) */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
     long *chunk_count; /* their number */
     long *bin;         /* per group and tile: its records' references to the tile, then where they go */
-    rtri *scratch;     /* per worker: 2 CHUNK records */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     long *cand;        /* per worker: CHUNK triangles the keys do not reject */
     long *tile_first;
@@ -238,13 +237,12 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
         for (int tx_ = (r)->x0 / TILE, tile = ty_ * (c)->tiles_x + tx_; tx_ <= ((r)->x1 - 1) / TILE; ++tx_, ++tile)
 
 /* Set up the triangles of chunks [begin, end) (one group): the keys reject the triangles without
- * a pixel centre in their box, the others' records go to the worker's scratch, then to a copy of
- * exactly their size; the group's references per tile are counted for the binning. */
+ * a pixel centre in their box, the others' records go to a block for 2 records a candidate, then
+ * shrunk to their number; the group's references per tile are counted for the binning. */
 static void setup_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     const long ntri = c->first_tri[c->nmeshes];
-    rtri *buf = c->scratch + 2 * CHUNK * (size_t)worker;
     pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
     long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * (size_t)c->ntiles;
     for (long ch = begin; ch < end; ++ch) {
@@ -270,14 +268,21 @@ static void setup_job(void *arg, int worker, long begin, long end)
             const pvert *pv = c->pv + c->first_vert[m];
             for (int k = 0; k < 3; ++k) corner[3 * i + k] = pv[tv[k]];
         }
+        rtri *recs = nc ? malloc(sizeof(rtri) * 2 * (size_t)nc) : NULL; /* at most 2 records a triangle */
+        if (nc && !recs) {
+            c->chunk_count[ch] = 1; /* a count without records: out of memory, seen by raster_draw */
+            continue;
+        }
         m = 0;
         for (long i = 0; i < nc; ++i) {
             while (cand[i] >= c->first_tri[m + 1]) ++m;
-            n += setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, buf + n);
+            n += setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, recs + n);
         }
-        c->chunk_count[ch] = n; /* records but no copy: out of memory, seen by raster_draw */
-        if (n && (c->chunk_recs[ch] = malloc(sizeof(rtri) * (size_t)n))) memcpy(c->chunk_recs[ch], buf, sizeof(rtri) * (size_t)n);
-        for (long i = 0; i < n; ++i) FOR_TILES(c, &buf[i], t) ++bin[t];
+        for (long i = 0; i < n; ++i) FOR_TILES(c, &recs[i], t) ++bin[t];
+        rtri *fit = n ? realloc(recs, sizeof(rtri) * (size_t)n) : NULL; /* shrinking; NULL: n is 0, or out of memory */
+        if (!fit) free(recs);
+        c->chunk_recs[ch] = fit;
+        c->chunk_count[ch] = n;
     }
 }
 
@@ -294,14 +299,18 @@ static void bin_job(void *arg, int worker, long begin, long end)
         }
 }
 
-/* Sort list[0 .. n) by (mesh, tri, fan), i.e. into the order the unreordered meshes give: LSD
- * radix sort on 11-bit digits of the key (first_tri[mesh] + tri) * 2 + fan, buf: 4 n words. */
-static void sort_list(const ctx_t *c, const rtri **list, long n, void *buf)
+/* order[0 .. n): the indices of rec[0 .. n) sorted by (mesh, tri, fan), i.e. the order the
+ * unreordered meshes give: LSD radix sort on 11-bit digits of the key (first_tri[mesh] + tri) * 2 + fan.
+ * buf: 3 n words (keys twice, then the other index array). */
+static void sort_order(const ctx_t *c, const rtri *rec, long n, long *order, void *buf)
 {
     enum { BITS = 11, RADIX = 1 << BITS };
     uint64_t *key[2] = {buf, (uint64_t *)buf + n};
-    const rtri **ptr[2] = {list, (const rtri **)((uint64_t *)buf + 2 * n)};
-    for (long i = 0; i < n; ++i) key[0][i] = ((uint64_t)(c->first_tri[list[i]->mesh] + list[i]->tri) << 1) | list[i]->fan;
+    long *idx[2] = {order, (long *)((uint64_t *)buf + 2 * n)};
+    for (long i = 0; i < n; ++i) {
+        key[0][i] = ((uint64_t)(c->first_tri[rec[i].mesh] + rec[i].tri) << 1) | rec[i].fan;
+        idx[0][i] = i;
+    }
     const uint64_t top = (uint64_t)c->first_tri[c->nmeshes] << 1;
     int from = 0;
     for (int shift = 0; shift == 0 || top >> shift; shift += BITS, from ^= 1) {
@@ -311,10 +320,10 @@ static void sort_list(const ctx_t *c, const rtri **list, long n, void *buf)
         for (long i = 0; i < n; ++i) {
             const long at = count[key[from][i] >> shift & (RADIX - 1)]++;
             key[from ^ 1][at] = key[from][i];
-            ptr[from ^ 1][at] = ptr[from][i];
+            idx[from ^ 1][at] = idx[from][i];
         }
     }
-    if (from) memcpy(list, ptr[1], sizeof(rtri *) * (size_t)n);
+    if (from) memcpy(order, idx[1], sizeof(long) * (size_t)n);
 }
 
 /* Rasterize the records binned to one tile in the order of the unreordered meshes' triangles
@@ -324,17 +333,21 @@ static void tile_job(void *arg, int worker, long begin, long end)
     ctx_t *c = arg;
     framebuf *fb = c->fb;
     uint64_t *buf = (uint64_t *)c->tile_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
+    long *order = (long *)(buf + 3 * (size_t)c->maxlist);
     rtri *local = (rtri *)(buf + 4 * (size_t)c->maxlist);
     for (long tile = begin; tile < end; ++tile) {
         const rtri **list = c->tile_list + c->tile_first[tile];
         const long n = c->tile_first[tile + 1] - c->tile_first[tile];
-        if (c->sort) sort_list(c, list, n, buf);
-        /* the tile's records gathered first: independent loads, many misses in flight */
+        /* the tile's records gathered first, in memory order (independent loads, many misses in
+         * flight), then sorted in the cache by index */
         for (long i = 0; i < n; ++i) local[i] = *list[i];
+        if (c->sort) sort_order(c, local, n, order, buf);
+        else
+            for (long i = 0; i < n; ++i) order[i] = i;
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
         for (long i = 0; i < n; ++i) {
-            const rtri *r = &local[i];
+            const rtri *r = &local[order[i]];
             const double area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
             double ax[3], ay[3], ex[3], ey[3], sg[3];
             int bias[3];
@@ -432,13 +445,12 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.group = 1 + (long)((double)nchunks * ntiles / (1 << 21)); /* at most ~2M bin counters */
     c.ngroups = (nchunks + c.group - 1) / c.group;
     c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
-    c.key = work(fb, 2, sizeof(pkey) * (size_t)(c.first_vert[nmeshes] + 1));
+    c.key = work(fb, 1, sizeof(pkey) * (size_t)(c.first_vert[nmeshes] + 1));
     c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
     c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
     c.bin = calloc((size_t)c.ngroups * (size_t)ntiles + 1, sizeof(long));
-    c.scratch = work(fb, 1, sizeof(rtri) * 2 * CHUNK * (size_t)nw);
-    c.corners = work(fb, 3, (sizeof(pvert) * 3 + sizeof(long)) * CHUNK * (size_t)nw);
-    if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.bin || !c.scratch || !c.corners) goto done;
+    c.corners = work(fb, 2, (sizeof(pvert) * 3 + sizeof(long)) * CHUNK * (size_t)nw);
+    if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.bin || !c.corners) goto done;
     c.cand = (long *)(c.corners + 3 * CHUNK * (size_t)nw);
     par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
     par_for(nchunks, c.group, nw, setup_job, &c);
@@ -463,7 +475,7 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
     for (int t = 0; t < ntiles; ++t)
         c.maxlist = c.tile_first[t + 1] - c.tile_first[t] > c.maxlist ? c.tile_first[t + 1] - c.tile_first[t] : c.maxlist;
-    if (!(c.tile_buf = work(fb, 4, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
+    if (!(c.tile_buf = work(fb, 3, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
