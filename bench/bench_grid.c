@@ -17,6 +17,7 @@
 #include "shlight.h"
 #include "util.h"
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -558,6 +559,50 @@ static void fr_empty_calls(void *a)
         must(shl_lights_eval_batch_f_mt(j->ctx, j->l, j->npts, j->pts, j->rgb, NULL, j->nthreads), "empty batch");
 }
 
+/* The machine's own ceiling for compute-bound threads: a register-only loop (10 independent
+ * multiply-then-add chains, no memory traffic: alone it keeps a core's two multiply pipes ~80%
+ * busy, so a second hardware thread on the same core can add little), on the calling thread alone, then on the calling
+ * thread and one more pthread of the same work (no library code).  Two vCPUs that are two
+ * physical cores give 2x; two hardware threads of one core, or a host that runs one vCPU at a
+ * time, give less. */
+enum { PROBE_ITERS = 4000000 };
+static void *fp_probe(void *arg)
+{
+    enum { CHAINS = 10 };
+    double x[CHAINS], m = 0.999999, a = 1e-7;
+    for (int k = 0; k < CHAINS; ++k) x[k] = 1.0 + k;
+    for (int i = 0; i < PROBE_ITERS; ++i)
+        for (int k = 0; k < CHAINS; ++k) x[k] = x[k] * m + a;
+    double s = 0.0;
+    for (int k = 0; k < CHAINS; ++k) s += x[k];
+    *(double *)arg = s;
+    return NULL;
+}
+static void fp_probe_one(void *a) { fp_probe(a); }
+static void fp_probe_two(void *a)
+{
+    double other;
+    pthread_t t;
+    if (pthread_create(&t, NULL, fp_probe, &other) != 0) {
+        fprintf(stderr, "bench_grid: pthread_create failed\n");
+        exit(1);
+    }
+    fp_probe(a);
+    pthread_join(t, NULL);
+    *(double *)a += other;
+}
+static void machine_thread_ceiling(void)
+{
+    double s1 = 0.0, s2 = 0.0;
+    const paired m = time_pair(fp_probe_one, &s1, fp_probe_two, &s2);
+    printf("\nThe machine's ceiling (register-only multiply-add loop, no memory, no library code; the same work on\n"
+           "1 thread, then on 2 pthreads, medians of %d interleaved rounds): 2 threads do %.2fx the work of 1 per\n"
+           "second (CPU efficiency %.0f%%): the most any compute-bound entry point above can reach here.\n",
+           ROUNDS, 2.0 * m.wall_ratio, 200.0 * m.cpu_ratio);
+    if (csv) fprintf(csv, "threads_machine,fp_loop,%d,%.4f,%.4f\n", PROBE_ITERS, 2.0 * m.wall_ratio, 2.0 * m.cpu_ratio);
+    bench_sink += s1 + s2;
+}
+
 /* The fixed cost of a threaded call: 2 threads minus 1 thread on two blocks of no work
  * (handing work to the second thread, waiting for it), against the shortest 2-thread
  * call of the table. */
@@ -685,6 +730,7 @@ static void fill_rate(void)
         printf("\nOther processes held %.0f%% of the machine's CPU time during the table (/proc/stat busy time less\n"
                "this process's CPU time): near 0 on an idle machine; the wall-clock speed-ups mean little above ~10%%.\n",
                100.0 * fmax(0.0, (busy1 - busy0) - (cpu_now() - own0)) / (total1 - total0));
+    machine_thread_ceiling();
     thread_start_cost(shortest);
     bench_sink += rgb[0] + drgb[0];
     shl_grid_destroy(g);
