@@ -294,7 +294,15 @@ fuzz: fuzz-build
 	  grep -e ' cov: ' $(FUZZ_DIR)/$$t.log | tail -n 1; \
 	  [ $$rc -eq 0 ] || fail="$$fail $$t"; \
 	done; \
-	if [ -n "$$fail" ]; then echo "fuzz: FAILED:$$fail (inputs in $(FUZZ_DIR)/artifacts/)"; exit 1; fi; \
+	if [ -n "$$fail" ]; then \
+	  for t in $$fail; do \
+	    echo "== $$t failed: what it reported, and its failing inputs (base64; replay: base64 -d > f; $(FUZZ_DIR)/tests/fuzz/$$t f)"; \
+	    grep -m 3 -e 'property violated' -e 'runtime error' -e 'ERROR: ' -e 'Sanitizer' $(FUZZ_DIR)/$$t.log; \
+	    for a in $(FUZZ_DIR)/artifacts/$$t-*; do [ -f "$$a" ] && { echo "$$a:"; base64 -w 0 "$$a" | head -c 4096; echo; }; done; \
+	  done; \
+	  echo "fuzz: FAILED:$$fail on $$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), avx512f: $$(grep -c -m1 avx512f /proc/cpuinfo) (inputs in $(FUZZ_DIR)/artifacts/)"; \
+	  exit 1; \
+	fi; \
 	echo "fuzz: all targets passed"
 
 # The fuzz binaries, built in a sub-make with clang and SANITIZE=fuzzer.

@@ -284,6 +284,10 @@ static inline void fz_polygon_ex(fz_in *in, fz_poly *P, int as_float)
     P->n = fz_count(in);
     const int want = P->n >= 3 && P->n <= SHL_MAX_VERTS ? P->n : 3; /* vertices to decode */
     if ((mode & 3) == 3) { /* raw: any coordinates */
+        /* q-space = world space, plane Z = 0, for fz_point's "in or near the plane" mode
+         * (with the zeroed perm and sign it wrote one coordinate and left two unset) */
+        memcpy(P->perm, fz_perms[0], sizeof P->perm);
+        P->sign[0] = P->sign[1] = P->sign[2] = 1.0;
         P->nv = want;
         for (int i = 0; i < 3 * want; ++i) P->v[i] = fz_real(in);
         if (mode & 0x80) /* near-duplicates: vertex i+1 = vertex i + tiny */

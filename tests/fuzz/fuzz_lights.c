@@ -61,11 +61,19 @@ static int sphere_inside(const light *li, const double x[3], int *ambiguous)
 }
 
 /* front test as documented, n . (x - v_0) > 0 with the Newell normal n, in long
- * double (no over/underflow for any double input; lights.c scales by powers of two) */
+ * double (no over/underflow for any double input; lights.c scales by powers of two).
+ * Ambiguous where the library's double evaluation may decide the other way: its normal
+ * (src/internal.h shl__newell_scaled: rounded edge differences, cross products and an
+ * n-term sum) is off by at most (n + 4) eps A_k per component, A_k the sum of the
+ * cross products' term magnitudes |e_j f_l| + |e_l f_j|, and the dot product with the
+ * rounded x - v_0 adds 4 eps sum_k |n_k (x_k - v_0k)|: at most (n + 5) eps (amag + mag)
+ * <= 69 eps < 1e-12 of (amag + mag) for n <= 64 (amag = sum_k A_k |x_k - v_0k|); plus
+ * the scaled differences' gradual underflow, at most 2^-1074 per operation in units of
+ * the largest edge (2^(2 ee)) and of x - v_0 (2^ex): 64 n 2^-1074 2^(2 ee + ex). */
 static int polygon_front(const light *li, const double x[3], int *ambiguous)
 {
     const double *v = li->P.v;
-    long double n[3] = {0.0L, 0.0L, 0.0L};
+    long double n[3] = {0.0L, 0.0L, 0.0L}, A[3] = {0.0L, 0.0L, 0.0L}, se = 0.0L, sx = 0.0L;
     for (int i = 1; i + 1 < li->P.n; ++i) {
         const double *p = v + 3 * i, *q = v + 3 * (i + 1);
         const long double e[3] = {(long double)p[0] - v[0], (long double)p[1] - v[1], (long double)p[2] - v[2]};
@@ -73,13 +81,21 @@ static int polygon_front(const light *li, const double x[3], int *ambiguous)
         n[0] += e[1] * f[2] - e[2] * f[1];
         n[1] += e[2] * f[0] - e[0] * f[2];
         n[2] += e[0] * f[1] - e[1] * f[0];
+        A[0] += fabsl(e[1] * f[2]) + fabsl(e[2] * f[1]);
+        A[1] += fabsl(e[2] * f[0]) + fabsl(e[0] * f[2]);
+        A[2] += fabsl(e[0] * f[1]) + fabsl(e[1] * f[0]);
+        for (int k = 0; k < 3; ++k) se = fmaxl(se, fmaxl(fabsl(e[k]), fabsl(f[k])));
     }
-    long double fd = 0.0L, mag = 0.0L;
+    long double fd = 0.0L, mag = 0.0L, amag = 0.0L;
     for (int k = 0; k < 3; ++k) {
-        fd += n[k] * ((long double)x[k] - v[k]);
-        mag += fabsl(n[k] * ((long double)x[k] - v[k]));
+        const long double dx = (long double)x[k] - v[k];
+        fd += n[k] * dx;
+        mag += fabsl(n[k] * dx);
+        amag += A[k] * fabsl(dx);
+        sx = fmaxl(sx, fabsl(dx));
     }
-    *ambiguous = fabsl(fd) <= 1e-12L * mag;
+    const long double underflow = 64.0L * li->P.n * 0x1p-1074L * (2.0L * se) * (2.0L * se) * (2.0L * sx);
+    *ambiguous = fabsl(fd) <= 1e-12L * (mag + amag) + underflow;
     return fd > 0.0L;
 }
 
