@@ -297,7 +297,7 @@ fuzz: fuzz-build
 	if [ -n "$$fail" ]; then \
 	  for t in $$fail; do \
 	    echo "== $$t failed: what it reported, and its failing inputs (base64; replay: base64 -d > f; $(FUZZ_DIR)/tests/fuzz/$$t f)"; \
-	    grep -m 3 -e 'property violated' -e 'runtime error' -e 'ERROR: ' -e 'Sanitizer' $(FUZZ_DIR)/$$t.log; \
+	    grep -m 3 -e 'property violated' -e 'runtime error' -e 'ERROR: ' -e 'SUMMARY: ' $(FUZZ_DIR)/$$t.log; \
 	    for a in $(FUZZ_DIR)/artifacts/$$t-*; do [ -f "$$a" ] && { echo "$$a:"; base64 -w 0 "$$a" | head -c 4096; echo; }; done; \
 	  done; \
 	  echo "fuzz: FAILED:$$fail on $$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), avx512f: $$(grep -c -m1 avx512f /proc/cpuinfo) (inputs in $(FUZZ_DIR)/artifacts/)"; \
