@@ -371,7 +371,11 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
          * no cancellation for an edge short against the distances; for a longer one its terms
          * can reach |edge| / min(r) (and overflow), while w_f - w_e itself is then accurate */
         const double rmin = g->dist[e] < g->dist[f] ? g->dist[e] : g->dist[f];
-        if (shl__dot3(edge, edge) <= rmin * rmin) { /* |edge| <= min r, squared (either form is valid where squares underflow) */
+        /* |edge| <= min r: squared where rmin^2 is normal (an |edge|^2 that underflows is below
+         * it too); by the norms below, where both squares underflow (x within 2^-500 of a
+         * vertex in scaled units: there edge / r_f of a longer edge reached 1e151, and inf in
+         * the float recurrence, fuzz_lights-subnormal-vertex-distance-float-nan) */
+        if (rmin >= 0x1p-500 ? shl__dot3(edge, edge) <= rmin * rmin : norm3(edge) <= rmin) {
             double sum[3];
             for (int k = 0; k < 3; ++k) sum[k] = g->rel[e][k] + g->rel[f][k];
             const double dr = -shl__dot3(edge, sum) / (g->dist[e] + g->dist[f]);

@@ -408,3 +408,54 @@ SHL_TEST(simd_lights_thin_polygon_scalar_path)
                  "max |L_00 - closed form| %.1e (bound 2.7e-5; Omega <= 4e-22)",
                  bad, worst_abs);
 }
+
+/* fuzz_lights-subnormal-vertex-distance-float-nan: a point 2^-1050 from one vertex and
+ * 2^-560 from the next (scaled units; a non-planar pentagon, so it is off the Newell
+ * plane).  Both distances squared underflow, and the set-up took the short-edge form of
+ * w_f - w_e, whose edge / r_f reached 1e147: inf in the float recurrence of the batch's
+ * scalar path, NaN from band 3 on.  The float light-set batch must agree with the double
+ * set (the same double geometry, float recurrences) within the float contract of
+ * tests/fuzz/README.md, K_l 64 (l+1) eps_f P (its 1e-4 Omega term covers what the double
+ * geometry's own rounding leaves and is not needed here), P = sum of the edges' arcs
+ * (long double, from the vertex directions). */
+SHL_TEST(simd_lights_subnormal_vertex_distance)
+{
+    const double pent[15] = {1, 0, 1, 0x1p-560, 0, 0x1p-560, 0, 0x1p-1050, 0x1p-1050, 0, 1, 1, -1, -1, 3};
+    const double white[3] = {1, 1, 1}, xd[3] = {0, 0, 0};
+    const float xf[3] = {0, 0, 0};
+    const int lmax = 6;
+    long double perim = 0.0L;
+    for (int i = 0; i < 5; ++i) {
+        const double *a = pent + 3 * i, *b = pent + 3 * ((i + 1) % 5);
+        long double la = 0.0L, lb = 0.0L, dot = 0.0L, cr[3];
+        for (int k = 0; k < 3; ++k) la += (long double)a[k] * a[k], lb += (long double)b[k] * b[k], dot += (long double)a[k] * b[k];
+        cr[0] = (long double)a[1] * b[2] - (long double)a[2] * b[1];
+        cr[1] = (long double)a[2] * b[0] - (long double)a[0] * b[2];
+        cr[2] = (long double)a[0] * b[1] - (long double)a[1] * b[0];
+        perim += atan2l(sqrtl(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), dot) * (la > 0 && lb > 0);
+    }
+    static float rgb[3 * NCMAX];
+    static double ref[3 * NCMAX];
+    double worst = 0.0;
+    int bad = 0;
+    for (int i = 0; i < NISA; ++i) {
+        shl_ctx *ctx = isa_ctx(isas[i], lmax);
+        if (!ctx) continue;
+        shl_lights *set;
+        CHECK(shl_lights_create(&set) == SHL_OK && shl_lights_add_polygon(set, pent, 5, white, 1) == SHL_OK);
+        CHECK(shl_lights_eval_batch_f(ctx, set, 1, xf, rgb, NULL) == SHL_OK);
+        CHECK(shl_lights_eval(ctx, set, xd, ref, NULL) == SHL_OK);
+        shl_lights_destroy(set);
+        for (int l = 0; l <= lmax; ++l)
+            for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+                const double kl = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)), tol = kl * 64.0 * (l + 1) * FLT_EPSILON * (double)perim;
+                const double err = fabs((double)rgb[k] - ref[k]);
+                bad += !(err <= tol);
+                worst = fmax(worst, err / tol);
+            }
+        shl_ctx_destroy(ctx);
+    }
+    CHECK(bad == 0);
+    harness_note("every ISA, lmax 6: %d coefficients outside K_l 64 (l+1) eps_f P (P = %.3Lf rad), worst %.2g of it", bad,
+                 perim, worst);
+}
