@@ -229,14 +229,14 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             hess_add(h, mu, quad ? qi[0] : i0, quad ? qm[0] : hv_set1(0.0), hv_set1(1.0), hv_set1(0.0), i0, &sum[0], first);
             if (lmax >= 1) hess_add(h, mu, quad ? qi[1] : i1, quad ? qm[1] : c * e0, a, da, i1, &sum[1], first);
             for (int l = 2; l <= lmax; ++l) {
-                const hv rl = hv_set1(inv_l[l]), lm1 = hv_set1(l - 1.0), tlm1 = hv_set1(2.0 * l - 1.0);
-                const hv pl = (tlm1 * a * p1 - lm1 * p2) * rl;                                      /* Wang Eq. 11 */
+                const hv pa = hv_set1(bc->leg_a[l]), pb = hv_set1(bc->leg_b[l]), tlm1 = hv_set1(bc->twol_m1[l]);
+                const hv pl = pa * a * p1 - pb * p2;                                                /* Wang Eq. 11 */
                 const hv dl = tlm1 * bb1 + d2;                                                      /* Wang Eq. 32 */
-                const hv dpl = (tlm1 * (af * dp1 + da * p1) - lm1 * dp2) * rl;
+                const hv dpl = pa * (af * dp1 + da * p1) - pb * dp2;
                 const hv il = (v * dl - j1 - (fp1 * dpl - i0 * pl)) * hv_set1(inv_l[l + 1]);      /* Wu I_l */
                 const hv jl = tlm1 * i1 + j2;
-                const hv cl = (b1 * p1 + s * dp1 - c2 * d1 + lm1 * bb2) * rl;                     /* Eq. 31 */
-                const hv bl = (tlm1 * cl - lm1 * bb2) * rl;                                         /* Eq. 30 */
+                /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
+                const hv bl = hv_set1(bc->b_alpha[l]) * (b1 * p1 + s * dp1 - c2 * d1) + hv_set1(bc->b_beta[l]) * bb2;
                 const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
                 const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
                 sum[l].bs = sum_so_far(first, sum[l].bs) + c * bl;

@@ -6,7 +6,7 @@
  * test_polygon's hard_extreme_scales compares shl_polygon with shl_polygon_grad.
  * The G edges of a group (3, or 2 where 2 or 4 are left) run side by side in each
  * band step: their recurrences are independent, so G dependency chains (the dP
- * chain, 5 operations per band) overlap instead of each edge waiting on the previous
+ * chain, 4 operations per band) overlap instead of each edge waiting on the previous
  * edge's last band.  Every bsum[l] still adds the edges in order (Eq. 14). */
 #define CW_CAT2(a, b) a##b
 #define CW_CAT(a, b) CW_CAT2(a, b)
@@ -43,16 +43,16 @@ __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom 
         if (lmax >= 2) bsum[1] += c[k] * b1[k];
     }
     for (int l = 2; l < lmax; ++l) { /* B_l up to lmax-1 (Eq. 29) */
-        const cv rl = cv_set1(bc->inv_l[l]), lm1 = cv_set1(bc->l_m1[l]), tlm1 = cv_set1(bc->twol_m1[l]);
+        const cv pa = cv_set1(bc->leg_a[l]), pb = cv_set1(bc->leg_b[l]), tlm1 = cv_set1(bc->twol_m1[l]);
+        const cv alpha = cv_set1(bc->b_alpha[l]), beta = cv_set1(bc->b_beta[l]);
 #pragma GCC unroll 3
         for (int k = 0; k < G; ++k) {
-            const cv pl = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-            const cv dl = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+            const cv pl = pa * a[k] * p_lm1[k] - pb * p_lm2[k]; /* Eq. 11 */
+            const cv dl = tlm1 * b_lm1[k] + d_lm2[k];           /* Eq. 32 */
             /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-            const cv dpl = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
-            /* Eq. 31: C_{l-1} */
-            const cv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
-            const cv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
+            const cv dpl = pa * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - pb * dp_lm2[k];
+            /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
+            const cv bl = alpha * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + beta * b_lm2[k];
             b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
             bsum[l] += c[k] * bl; /* Eq. 14, edges in order */
             p_lm2[k] = p_lm1[k], p_lm1[k] = pl;

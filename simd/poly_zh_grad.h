@@ -59,20 +59,20 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
         if (lmax >= 2) gv_accumulate(&bsum[1], c[k] * b1[k], fresh);
     }
     for (int l = 2; l <= lmax; ++l) {
-        const gv rl = gv_set1(bc->inv_l[l]), lm1 = gv_set1(bc->l_m1[l]), tlm1 = gv_set1(bc->twol_m1[l]);
+        const gv pa = gv_set1(bc->leg_a[l]), pb = gv_set1(bc->leg_b[l]), tlm1 = gv_set1(bc->twol_m1[l]);
 #pragma GCC unroll 3
         for (int k = 0; k < G; ++k) {
-            pl[k][l] = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-            dl[k][l] = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+            pl[k][l] = pa * a[k] * p_lm1[k] - pb * p_lm2[k]; /* Eq. 11 */
+            dl[k][l] = tlm1 * b_lm1[k] + d_lm2[k];           /* Eq. 32 */
             /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-            dpl[k][l] = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
+            dpl[k][l] = pa * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - pb * dp_lm2[k];
         }
         if (l == lmax) break; /* B_lmax is not needed (Eq. 29 reads B_l, l < lmax) */
+        const gv alpha = gv_set1(bc->b_alpha[l]), beta = gv_set1(bc->b_beta[l]);
 #pragma GCC unroll 3
         for (int k = 0; k < G; ++k) {
-            /* Eq. 31: C_{l-1} */
-            const gv cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
-            const gv bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl; /* Eq. 30 */
+            /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
+            const gv bl = alpha * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + beta * b_lm2[k];
             b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
             gv_accumulate(&bsum[l], c[k] * bl, first && k == 0); /* Eq. 14, edges in order */
             p_lm2[k] = p_lm1[k], p_lm1[k] = pl[k][l];

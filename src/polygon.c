@@ -565,8 +565,12 @@ static pthread_once_t zh_bands_once = PTHREAD_ONCE_INIT;
 static void make_zh_bands(void)
 {
     for (int l = 0; l <= SHL_LMAX_MAX; ++l) {
-        zh_bands.l_m1[l] = l - 1;
+        const double den = l + (l == 0); /* l, 1 at l = 0 (the recurrences start at l = 2) */
         zh_bands.twol_m1[l] = 2 * l - 1;
+        zh_bands.leg_a[l] = (2.0 * l - 1.0) / den; /* each one correctly rounded division */
+        zh_bands.leg_b[l] = (l - 1.0) / den;
+        zh_bands.b_alpha[l] = (2.0 * l - 1.0) / (den * den);
+        zh_bands.b_beta[l] = (l - 1.0) * (l - 1.0) / (den * den);
         zh_bands.norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI));
         zh_bands.inv_l[l] = 1.0 / (l + (l == 0));
         zh_bands.s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0));

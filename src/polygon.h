@@ -39,8 +39,11 @@ void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *ver
 typedef struct {
     double norm[SHL_LMAX_MAX + 1];    /* K_l = sqrt((2l+1) / 4 pi) */
     double inv_l[SHL_LMAX_MAX + 2];   /* 1 / l (1 at l = 0), l <= SHL_LMAX_MAX + 1 */
-    double l_m1[SHL_LMAX_MAX + 1];    /* l - 1 */
     double twol_m1[SHL_LMAX_MAX + 1]; /* 2l - 1 */
+    double leg_a[SHL_LMAX_MAX + 1];   /* Eq. 11 as P_l = A_l a P_{l-1} - B_l P_{l-2}: A_l = (2l-1) / l */
+    double leg_b[SHL_LMAX_MAX + 1];   /* and B_l = (l-1) / l */
+    double b_alpha[SHL_LMAX_MAX + 1]; /* Eq. 30 with Eq. 31's C_{l-1}: B_l = alpha_l X + beta_l B_{l-2}, */
+    double b_beta[SHL_LMAX_MAX + 1];  /* alpha_l = (2l-1) / l^2, beta_l = (l-1)^2 / l^2 (X: Eq. 31's sum) */
     double s_b[SHL_LMAX_MAX + 1];     /* Eq. 29 weights (2l-1) / (l(l+1)) */
     double s_s[SHL_LMAX_MAX + 1];     /* and (l-2)(l-1) / (l(l+1)) */
 } shl__zh_band_consts;

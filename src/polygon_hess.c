@@ -127,6 +127,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
         s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
+    const shl__zh_band_consts *bc = shl__zh_bands(); /* the coefficient kernels' band constants, so their bits */
     hess_edge he[SHL_MAX_VERTS];
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += NL) {
@@ -188,16 +189,16 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                 if (lmax >= 1) ei[1][k] = i1[k], em[1][k] = ce * h->e0, ep[1][k] = ae, edp[1][k] = da[k];
             }
             for (int l = 2; l <= lmax; ++l) {
-                const double rl = inv_l[l], lm1 = l - 1.0, tlm1 = 2.0 * l - 1.0;
+                const double pa = bc->leg_a[l], pb = bc->leg_b[l], tlm1 = bc->twol_m1[l];
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
-                    const double pl = (tlm1 * a[k] * p1[k] - lm1 * p2[k]) * rl;   /* Wang Eq. 11 */
+                    const double pl = pa * a[k] * p1[k] - pb * p2[k];              /* Wang Eq. 11 */
                     const double dl = tlm1 * bb1[k] + d2[k];                       /* Wang Eq. 32 */
-                    const double dpl = (tlm1 * (af[k] * dp1[k] + da[k] * p1[k]) - lm1 * dp2[k]) * rl;
+                    const double dpl = pa * (af[k] * dp1[k] + da[k] * p1[k]) - pb * dp2[k];
                     const double il = (v[k] * dl - j1[k] - (fp1 * dpl - i0 * pl)) * inv_l[l + 1]; /* Wu I_l */
                     const double jl = tlm1 * i1[k] + j2[k];
-                    const double cl = (b1[k] * p1[k] + s[k] * dp1[k] - c2[k] * d1[k] + lm1 * bb2[k]) * rl; /* Eq. 31 */
-                    const double bl = (tlm1 * cl - lm1 * bb2[k]) * rl;                                   /* Eq. 30 */
+                    /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
+                    const double bl = bc->b_alpha[l] * (b1[k] * p1[k] + s[k] * dp1[k] - c2[k] * d1[k]) + bc->b_beta[l] * bb2[k];
                     const double ml = tlm1 * e1[k] + m2[k];                                              /* (H4) */
                     /* (H3) with [f f' P_l] = (f f')(T) dP_l + (G2 T - 2 E_0) P_l(a_e) */
                     const double el = (v[k] * jl - m1[k] - h->ffp1 * dpl + 2.0 * h->e0 * pl + h->g2 * (bl - gamma * pl)) *

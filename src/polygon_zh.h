@@ -59,14 +59,19 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #endif
     /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
     const int ltop = WITH_GRAD ? lmax : lmax - 1;
-    REAL norm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 2], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
-    REAL l_m1[SHL_LMAX_MAX + 1], twol_m1[SHL_LMAX_MAX + 1];
-    inv_l[lmax + 1] = (REAL)(1.0 / (lmax + 1));
+    REAL norm[SHL_LMAX_MAX + 1], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
+    REAL twol_m1[SHL_LMAX_MAX + 1], leg_a[SHL_LMAX_MAX + 1], leg_b[SHL_LMAX_MAX + 1], b_alpha[SHL_LMAX_MAX + 1],
+        b_beta[SHL_LMAX_MAX + 1]; /* as shl__zh_bands (polygon.h) */
+#if WITH_GRAD
+    REAL inv_lp1[SHL_LMAX_MAX + 1]; /* 1 / (l+1), Wu's I_l step */
+    for (int l = 0; l <= lmax; ++l) inv_lp1[l] = (REAL)(1.0 / (l + 1));
+#endif
     for (int l = 0; l <= lmax; ++l) {
-        l_m1[l] = (REAL)(l - 1);
+        const double den = l + (l == 0);
         twol_m1[l] = (REAL)(2 * l - 1);
+        leg_a[l] = (REAL)((2.0 * l - 1.0) / den), leg_b[l] = (REAL)((l - 1.0) / den);
+        b_alpha[l] = (REAL)((2.0 * l - 1.0) / (den * den)), b_beta[l] = (REAL)((l - 1.0) * (l - 1.0) / (den * den));
         norm[l] = (REAL)sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
-        inv_l[l] = (REAL)(1.0 / (l + (l == 0)));
         s_b[l] = (REAL)((2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)));   /* Eq. 29 weights */
         s_s[l] = (REAL)((l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0)));
     }
@@ -119,23 +124,22 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #endif
             }
             for (int l = 2; l <= ltop; ++l) {
-                const REAL rl = inv_l[l], lm1 = l_m1[l], tlm1 = twol_m1[l];
+                const REAL pa = leg_a[l], pb = leg_b[l], tlm1 = twol_m1[l];
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
-                    const REAL pl = (tlm1 * a[k] * p_lm1[k] - lm1 * p_lm2[k]) * rl; /* Eq. 11 */
-                    const REAL dl = tlm1 * b_lm1[k] + d_lm2[k];                     /* Eq. 32 */
+                    const REAL pl = pa * a[k] * p_lm1[k] - pb * p_lm2[k]; /* Eq. 11 */
+                    const REAL dl = tlm1 * b_lm1[k] + d_lm2[k];           /* Eq. 32 */
                     /* dP_l from Eq. 11 at both ends: a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
-                    const REAL dpl = (tlm1 * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - lm1 * dp_lm2[k]) * rl;
+                    const REAL dpl = pa * (af[k] * dp_lm1[k] + da[k] * p_lm1[k]) - pb * dp_lm2[k];
 #if WITH_GRAD
-                    const REAL il = (v[k] * dl - j_lm1[k] - (fp1 * dpl - i0 * pl)) * inv_l[l + 1];
+                    const REAL il = (v[k] * dl - j_lm1[k] - (fp1 * dpl - i0 * pl)) * inv_lp1[l];
                     const REAL jl = tlm1 * i_lm1[k] + j_lm2[k];
                     j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
                     edge_i[e][l][k] = il;
                     /* B_lmax (l = ltop here) goes into the unused bsum[lmax]: no branch in the lanes */
 #endif
-                    /* Eq. 31: C_{l-1} */
-                    const REAL cl = (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k] + lm1 * b_lm2[k]) * rl;
-                    const REAL bl = (tlm1 * cl - lm1 * b_lm2[k]) * rl;                /* Eq. 30 */
+                    /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
+                    const REAL bl = b_alpha[l] * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + b_beta[l] * b_lm2[k];
                     b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
                     bsum[l][k] += c[k] * bl;                                              /* Eq. 14 */
                     p_lm2[k] = p_lm1[k], p_lm1[k] = pl;
