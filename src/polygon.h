@@ -35,15 +35,16 @@ typedef struct shl__poly_geom {
 /* Build the geometry; the caller has validated n and finiteness. */
 void shl__poly_geom_init(shl__poly_geom *g, const double x[3], const double *verts, int n);
 /* Per-band constants of the double ZH recurrence, l <= SHL_LMAX_MAX, computed once
- * (pthread_once) and read by both double kernels (simd/poly_zh_coeff.h, simd/poly_zh_grad.h). */
+ * (pthread_once) and read by every double kernel (simd/poly_zh_coeff.h, simd/poly_zh_grad.h,
+ * simd/poly_hess_batch.h, polygon_hess.c): the same constants, so the same bits. */
 typedef struct {
     double norm[SHL_LMAX_MAX + 1];    /* K_l = sqrt((2l+1) / 4 pi) */
     double inv_l[SHL_LMAX_MAX + 2];   /* 1 / l (1 at l = 0), l <= SHL_LMAX_MAX + 1 */
     double twol_m1[SHL_LMAX_MAX + 1]; /* 2l - 1 */
-    double leg_a[SHL_LMAX_MAX + 1];   /* Eq. 11 as P_l = A_l a P_{l-1} - B_l P_{l-2}: A_l = (2l-1) / l */
-    double leg_b[SHL_LMAX_MAX + 1];   /* and B_l = (l-1) / l */
-    double b_alpha[SHL_LMAX_MAX + 1]; /* Eq. 30 with Eq. 31's C_{l-1}: B_l = alpha_l X + beta_l B_{l-2}, */
-    double b_beta[SHL_LMAX_MAX + 1];  /* alpha_l = (2l-1) / l^2, beta_l = (l-1)^2 / l^2 (X: Eq. 31's sum) */
+    double leg_a[SHL_LMAX_MAX + 1];   /* (2l-1) / l and (l-1) / l: Eq. 11 as */
+    double leg_b[SHL_LMAX_MAX + 1];   /* P_l = leg_a a P_{l-1} - leg_b P_{l-2}, and the same for dP_l */
+    double b_alpha[SHL_LMAX_MAX + 1]; /* (2l-1) / l^2 and (l-1)^2 / l^2: Eq. 30 with Eq. 31's C_{l-1} as */
+    double b_beta[SHL_LMAX_MAX + 1];  /* B_l = b_alpha (B_1 P_{l-1} + s dP_{l-1} - c^2 D_{l-1}) + b_beta B_{l-2} */
     double s_b[SHL_LMAX_MAX + 1];     /* Eq. 29 weights (2l-1) / (l(l+1)) */
     double s_s[SHL_LMAX_MAX + 1];     /* and (l-2)(l-1) / (l(l+1)) */
 } shl__zh_band_consts;

@@ -198,7 +198,8 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                     const double il = (v[k] * dl - j1[k] - (fp1 * dpl - i0 * pl)) * inv_l[l + 1]; /* Wu I_l */
                     const double jl = tlm1 * i1[k] + j2[k];
                     /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
-                    const double bl = bc->b_alpha[l] * (b1[k] * p1[k] + s[k] * dp1[k] - c2[k] * d1[k]) + bc->b_beta[l] * bb2[k];
+                    const double bl =
+                        bc->b_alpha[l] * (b1[k] * p1[k] + s[k] * dp1[k] - c2[k] * d1[k]) + bc->b_beta[l] * bb2[k];
                     const double ml = tlm1 * e1[k] + m2[k];                                              /* (H4) */
                     /* (H3) with [f f' P_l] = (f f')(T) dP_l + (G2 T - 2 E_0) P_l(a_e) */
                     const double el = (v[k] * jl - m1[k] - h->ffp1 * dpl + 2.0 * h->e0 * pl + h->g2 * (bl - gamma * pl)) *

@@ -139,7 +139,8 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
                     /* B_lmax (l = ltop here) goes into the unused bsum[lmax]: no branch in the lanes */
 #endif
                     /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
-                    const REAL bl = b_alpha[l] * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + b_beta[l] * b_lm2[k];
+                    const REAL bl =
+                        b_alpha[l] * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + b_beta[l] * b_lm2[k];
                     b_lm2[k] = b_lm1[k], b_lm1[k] = bl;
                     bsum[l][k] += c[k] * bl;                                              /* Eq. 14 */
                     p_lm2[k] = p_lm1[k], p_lm1[k] = pl;
