@@ -409,7 +409,7 @@ help:
 	@printf '  %-19s %-64s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
 	@printf '  %-19s %-64s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
 	@printf '  %-19s %-64s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
-	@printf '  %-19s %-64s %s\n' test-avx512-emu 'the suite with the avx512 kernels emulated by SIMDe on AVX2 (CI)' 'TIME'
+	@printf '  %-19s %-64s %s\n' test-avx512-emu 'the suite with the avx512 kernels emulated by SIMDe on AVX2 (CI)' '~1 min build + 30 s'
 	@printf '  %-19s %-64s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
 	@printf '  %-19s %-64s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
 	@printf '  %-19s %-64s %s\n' bench-vs-commit 'OLD=<rev>: shl_polygon of <rev> vs this tree, 7 alternated rounds' '~30 s build + 1 min'
