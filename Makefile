@@ -1,5 +1,13 @@
 # shlight -- see README.md.  `make help` lists every target with its typical run time.
 CC       ?= cc
+# AVX512_EMULATE=1: the avx512 kernels compiled through SIMDe's AVX-512 emulation (Debian libsimde-dev)
+# as AVX2 + FMA code and selected where avx2 runs (-DSHL_AVX512_EMULATE: simd/isa_list.h,
+# simd/avx512/helper.h, src/dispatch.c), so they run on CPUs without AVX-512; its own default BUILD.
+AVX512_EMULATE ?= 0
+ifeq ($(AVX512_EMULATE),1)
+  BUILD  ?= build/avx512-emu
+  SHL_EMULATE_DEFS := -DSHL_AVX512_EMULATE
+endif
 BUILD    ?= build
 PREFIX   ?= /usr/local
 DESTDIR  ?=
@@ -8,7 +16,7 @@ SANITIZE ?= 0
 WARN     := -Wall -Wextra -Wpedantic -Werror
 CSTD     := -std=c11 -D_XOPEN_SOURCE=700
 OPT      ?= -O2
-CFLAGS_ALL = $(CSTD) $(OPT) $(WARN) -fPIC -Iinclude -Isrc $(CFLAGS)
+CFLAGS_ALL = $(CSTD) $(OPT) $(WARN) -fPIC -Iinclude -Isrc $(SHL_EMULATE_DEFS) $(CFLAGS)
 # SANITIZE=1: AddressSanitizer + UBSan; SANITIZE=thread: ThreadSanitizer.
 ifeq ($(SANITIZE),1)
   CFLAGS_ALL += -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -g
@@ -25,13 +33,13 @@ LDLIBS   += -lm -lpthread
 # Every kernel text simd/<kernel>_batch.h is compiled once per ISA into $(BUILD)/simd/<isa>/<kernel>_batch.o,
 # with simd/<isa>/helper.h included first and only that ISA's flags (e.g. -mavx2 -mfma);
 # src/dispatch.c picks a table at run time.
-SHL_ISAS    := $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=name' simd/isa_list.h)
+SHL_ISAS    := $(shell $(CC) -E -P -x c $(SHL_EMULATE_DEFS) '-DSHL_ISA(name,flags,cpu)=name' simd/isa_list.h)
 SHL_KERNELS := $(patsubst simd/%.h,%,$(wildcard simd/*_batch.h))
 ifeq ($(filter scalar,$(SHL_ISAS)),)
   $(error Makefile: '$(CC) -E simd/isa_list.h' lists no scalar ISA (got '$(SHL_ISAS)'))
 endif
 # $(call isa_flags,ISA): the flags column of ISA's line, without its quotes.
-isa_flags = $(shell $(CC) -E -P -x c '-DSHL_ISA(name,flags,cpu)=name flags' simd/isa_list.h | sed -n 's/^$(1) "\(.*\)"$$/\1/p')
+isa_flags = $(shell $(CC) -E -P -x c $(SHL_EMULATE_DEFS) '-DSHL_ISA(name,flags,cpu)=name flags' simd/isa_list.h | sed -n 's/^$(1) "\(.*\)"$$/\1/p')
 SIMD_OBJ := $(foreach i,$(SHL_ISAS),$(SHL_KERNELS:%=simd/$(i)/%.o))
 
 LIB_SRC  := $(wildcard src/*.c)
@@ -57,7 +65,7 @@ STATIC   := $(BUILD)/libshlight.a
 SHARED   := $(BUILD)/libshlight.so
 SHARED_REAL := $(BUILD)/libshlight.so.$(SHL_VERSION)
 
-.PHONY: all test test-valgrind test-neon demo bench install lobes clean
+.PHONY: all test test-valgrind test-neon test-avx512-emu demo bench install lobes clean
 all: $(STATIC) $(SHARED)
 
 # Every object depends on every header (simple and safe for a tree this size).
@@ -81,7 +89,7 @@ $(foreach i,$(SHL_ISAS),$(eval SHL_ISA_FLAGS_$(i) := $(call isa_flags,$(i))) \
   $(eval $(call isa_rules,$(i),$(BUILD),)) $(eval $(call isa_rules,$(i),$(BUILD)/thooks,-DSHL_ALLOC_HOOKS)))
 
 $(BUILD)/src/dispatch.o $(BUILD)/thooks/src/dispatch.o: CFLAGS_ALL += \
-  -DSHL_BUILD_CFLAGS="\"$(strip $(CSTD) $(OPT) $(CFLAGS) $(if $(filter-out 0,$(SANITIZE)),SANITIZE=$(SANITIZE)))\""
+  -DSHL_BUILD_CFLAGS="\"$(strip $(CSTD) $(OPT) $(CFLAGS) $(if $(filter-out 0,$(SANITIZE)),SANITIZE=$(SANITIZE)) $(SHL_EMULATE_DEFS))\""
 
 $(STATIC): $(LIB_OBJ)
 	@rm -f $@
@@ -145,6 +153,13 @@ NEON_QEMU ?= $(shell command -v qemu-aarch64-static || command -v qemu-aarch64)
 test-neon:
 	$(MAKE) CC=$(NEON_CC) BUILD=$(BUILD)/aarch64 SANITIZE=0 $(BUILD)/aarch64/tests/run_tests
 	$(NEON_QEMU) -L /usr/aarch64-linux-gnu $(BUILD)/aarch64/tests/run_tests $(TEST_FILTER)
+
+# The whole suite with the avx512 kernels run through SIMDe's AVX-512 emulation on an AVX2 + FMA
+# CPU (AVX512_EMULATE=1, in $(BUILD)/avx512-emu; needs libsimde-dev): the default choice is avx512
+# there (tests/test_simd.c: simd_isa_matches_cpu), SHLIGHT_ISA=avx512 selects it for every test.
+test-avx512-emu:
+	$(MAKE) AVX512_EMULATE=1 BUILD=$(BUILD)/avx512-emu $(BUILD)/avx512-emu/tests/run_tests
+	SHLIGHT_ISA=avx512 $(BUILD)/avx512-emu/tests/run_tests $(TEST_FILTER)
 
 # The whole suite under valgrind memcheck (any invalid access or leak fails; about
 # 13 minutes on the CI machine), except the tests whose references need long double
@@ -394,6 +409,7 @@ help:
 	@printf '  %-19s %-64s %s\n' test 'build and run every test (TEST_FILTER=a,b,-c selects by name)' '1-3 min'
 	@printf '  %-19s %-64s %s\n' test-valgrind 'the suite under valgrind memcheck (CI)' '13 min'
 	@printf '  %-19s %-64s %s\n' test-neon 'the suite built for AArch64, run under qemu-user (CI)' '~20 min'
+	@printf '  %-19s %-64s %s\n' test-avx512-emu 'the suite with the avx512 kernels emulated by SIMDe on AVX2 (CI)' '~1 min build + 30 s'
 	@printf '  %-19s %-64s %s\n' demo 'render build/demo.png; stage times and grid-vs-analytic error' '~20 s build + 5 s (12 s 1st run)'
 	@printf '  %-19s %-64s %s\n' bench 'build the benchmarks into $$(BUILD)/bench/ (runs none)' '~20 s'
 	@printf '  %-19s %-64s %s\n' bench-vs-commit 'OLD=<rev>: shl_polygon of <rev> vs this tree, 7 alternated rounds' '~30 s build + 1 min'
@@ -419,5 +435,5 @@ help:
 	@printf '  %-19s %-64s %s\n' check-readme-figures "README's test figures equal what the last full make test printed" '<1 s'
 	@printf '  %-19s %-64s %s\n' check-csv 'every CSV under bench/tables/ parses with a constant field count' '<1 s'
 	@printf '  %-19s %-64s %s\n' help 'this list' 'instant'
-	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, PREFIX (/usr/local), DESTDIR,'
+	@echo 'Variables: CC, BUILD (build/), OPT, SANITIZE=1|thread, AVX512_EMULATE=1, PREFIX (/usr/local), DESTDIR,'
 	@echo '  TEST_FILTER, FUZZ_SECONDS, FUZZ_TARGETS, STRESS_N, STRESS_THREADS.'

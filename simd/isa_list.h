@@ -20,7 +20,15 @@ SHL_ISA(avx2, "-mavx2 -mfma", shl__cpu_avx2())
  * time, gcc and clang): polygon 1.7-1.8x, with gradients too; sphere 1.35-1.45x;
  * light set 1.65-1.8x; interpolation 1.15-1.55x; Hermite at lmax 1 (avx2 kernel)
  * 1.0x. */
+#if defined(SHL_AVX512_EMULATE)
+/* make AVX512_EMULATE=1: the avx512 kernels through SIMDe's AVX-512 emulation
+ * (simd/avx512/helper.h), AVX2 + FMA code (src/dispatch.c: shl__cpu_avx512);
+ * -Wno-psabi: gcc notes every 64-byte vector passed without AVX-512 (static
+ * inline functions only, so no ABI is crossed). */
+SHL_ISA(avx512, "-mavx2 -mfma -Wno-psabi", shl__cpu_avx512())
+#else
 SHL_ISA(avx512, "-mavx512f -mavx512dq -mavx512vl -mavx512bw -mavx2 -mfma", shl__cpu_avx512())
+#endif
 #endif
 #if defined(__aarch64__)
 SHL_ISA(neon, "", 1) /* baseline on AArch64 */

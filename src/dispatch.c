@@ -36,6 +36,11 @@ static int shl__cpu_avx2(void)
     return (b >> 5) & 1;
 }
 
+#ifdef SHL_AVX512_EMULATE
+/* make AVX512_EMULATE=1: the avx512 kernels are SIMDe's emulation of AVX-512
+ * in AVX2 + FMA code (simd/isa_list.h), so they run where avx2 does. */
+static int shl__cpu_avx512(void) { return shl__cpu_avx2(); }
+#else
 /* AVX-512 F, DQ, VL and BW usable (with AVX2 and FMA): CPUID.7.0:EBX reports
  * them (bits 16, 17, 31, 30), XGETBV(0) shows the OS saves XMM, YMM, opmask,
  * ZMM_Hi256 and Hi16_ZMM state (bits 1, 2, 5, 6, 7). */
@@ -50,6 +55,7 @@ static int shl__cpu_avx512(void)
     const unsigned need = 1u << 16 | 1u << 17 | 1u << 30 | 1u << 31;
     return (b & need) == need;
 }
+#endif /* SHL_AVX512_EMULATE */
 #endif
 
 #define SHL_ISA(name, flags, cpu) SHL__DECLARE_KERNELS(name)

@@ -411,8 +411,22 @@ SHL_TEST(simd_isa_matches_cpu)
     const int avx512 = avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
     CHECK((shl__isa_find("avx2") != NULL) == avx2);
+#ifdef SHL_AVX512_EMULATE
+    /* make AVX512_EMULATE=1: the avx512 kernels are SIMDe's AVX2 + FMA code, so
+     * they run, and are the default choice, exactly where avx2 does. */
+    CHECK((shl__isa_find("avx512") != NULL) == avx2);
+    const char *old = getenv("SHLIGHT_ISA");
+    char saved[64] = "";
+    if (old) snprintf(saved, sizeof saved, "%s", old);
+    unsetenv("SHLIGHT_ISA");
+    CHECK(!strcmp(shl__isa_select()->name, avx2 ? "avx512" : "scalar"));
+    if (old) setenv("SHLIGHT_ISA", saved, 1);
+    harness_note("CPU: avx2+fma %s, avx512 f/dq/vl/bw %s; avx512 emulated (SIMDe): %s", avx2 ? "yes" : "no",
+                 avx512 ? "yes" : "no", shl__isa_find("avx512") ? "runs, the default" : "not run");
+#else
     CHECK((shl__isa_find("avx512") != NULL) == avx512);
     harness_note("CPU: avx2+fma %s, avx512 f/dq/vl/bw %s", avx2 ? "yes" : "no", avx512 ? "yes" : "no");
+#endif
 #else
     harness_note("not x86-64: nothing to compare");
 #endif

@@ -1,9 +1,19 @@
 /* AVX-512 (F, DQ, VL, BW) vector verbs: 16 float lanes, compares into
- * __mmask16 lane masks (simd/scalar/helper.h documents each verb). */
+ * __mmask16 lane masks (simd/scalar/helper.h documents each verb).
+ * With SHL_AVX512_EMULATE (make AVX512_EMULATE=1, make test-avx512-emu) the
+ * same verbs compile through SIMDe's AVX-512 emulation in AVX2 + FMA code:
+ * its native aliases map the _mm512_* names and __m512* types to simde's. */
 #ifndef SHL_SIMD_HELPER_H
 #define SHL_SIMD_HELPER_H
 
+#ifdef SHL_AVX512_EMULATE
+#define SIMDE_ENABLE_NATIVE_ALIASES
+#include <simde/x86/avx512.h>
+#undef _mm512_shuffle_f32x4 /* emulated by SIMDe 0.7.4, without its alias */
+#define _mm512_shuffle_f32x4(a, b, imm8) simde_mm512_shuffle_f32x4(a, b, imm8)
+#else
 #include <immintrin.h>
+#endif
 #include <stddef.h>
 
 #define SHL_VLEN 16
@@ -40,7 +50,16 @@ static inline vf vf_copysign(vf a, vf b)
 #define SHL_VDLEN 8
 typedef __m512d vd;
 static inline vd vd_set1(double a) { return _mm512_set1_pd(a); }
+#ifdef SHL_AVX512_EMULATE
+static inline vd vd_load_float(const float *p) /* SIMDe 0.7.4 has no _mm512_cvtps_pd */
+{
+    double wide[8];
+    for (int k = 0; k < 8; ++k) wide[k] = p[k];
+    return _mm512_loadu_pd(wide);
+}
+#else
 static inline vd vd_load_float(const float *p) { return _mm512_cvtps_pd(_mm256_loadu_ps(p)); } /* p[0..7] widened */
+#endif
 static inline void vd_store(double *p, vd a) { _mm512_storeu_pd(p, a); }
 static inline vd vd_add(vd a, vd b) { return _mm512_add_pd(a, b); }
 static inline vd vd_mul(vd a, vd b) { return _mm512_mul_pd(a, b); }
