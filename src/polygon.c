@@ -287,6 +287,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     g->sliver = 0;
     g->solid_angle = 0.0;
     g->grad_scale[0] = g->grad_scale[1] = 1.0;
+    g->gvec_max = 0.0;
     if (m < 3) return;
 
     /* scaled units: v - x times 2^-ex, largest component in [1, 2) (internal.h) */
@@ -415,7 +416,10 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
             double q[3], gxmu[3];
             shl__cross3(edges[e], g->mu[e], q);
             const double clen_shifted = shl__ldexp(clen, shift);
-            for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen_shifted;
+            for (int k = 0; k < 3; ++k) {
+                g->gvec[e][k] = q[k] / clen_shifted;
+                g->gvec_max = fmax(g->gvec_max, fabs(g->gvec[e][k]));
+            }
             shl__cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
             g->fprime1[e] = shl__dot3(g->w[f], gxmu);
             /* I_0 = g . int_0^gamma w(t) dt = g . (w_e sin(gamma) + lambda_e (1 - cos(gamma))) */
