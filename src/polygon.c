@@ -287,6 +287,7 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     g->sliver = 0;
     g->solid_angle = 0.0;
     g->grad_scale[0] = g->grad_scale[1] = 1.0;
+    g->gvec_max = 0.0;
     if (m < 3) return;
 
     /* scaled units: v - x times 2^-ex, largest component in [1, 2) (internal.h) */
@@ -391,16 +392,34 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
         }
     }
     if (!with_grad) return;
+    /* |gvec_e| = |edge| / |c| = 1 / (distance of x from the edge's line): beyond DBL_MAX in
+     * scaled units for a non-planar polygon whose point is within ~2^-1020 of an edge's line
+     * (scaled units; x near a vertex: fuzz_lights-subnormal-vertex-distance-float-nan), where
+     * g x mu, f' and I_0 became inf and NaN.  The gradient is linear in (gvec, f', I_0), so they
+     * are all kept times 2^-shift, shift > 0 only where some |gvec_e| would exceed 2^1000, and
+     * shift is added to grad_scale: the result, 2^(shift - E) times finite numbers, is finite
+     * wherever the gradient in x units is representable (to rounding; beyond, +-inf from the
+     * unscaling).  The Hessian (polygon_hess.c) is quadratic in them and unscales by grad_scale
+     * twice: consistent too.  |edge| <= 4 and |c| >= 2^-1074 bound the shift by 77. */
+    int shift = 0;
+    for (int e = 0; e < m; ++e)
+        if (clen_e[e] > 0.0) shift = imax(shift, shl__ilogb(norm3(edges[e])) - shl__ilogb(clen_e[e]) + 1 - 1000);
+    if (shift > 0) shl__pow2_split(shift - ex, g->grad_scale);
     /* A loop of its own: the edges' division chains (mu, then gvec) overlap. */
     for (int e = 0; e < m; ++e) {
         const int f = e + 1 == m ? 0 : e + 1;
         const double clen = clen_e[e];
         if (clen > 0.0) {
             /* foot of x on the edge's line: q = edge x c / |edge|^2, so q/|q|^2 = (edge x mu) / |c|
-             * (no product of two edge lengths: nothing underflows for a tiny, distant polygon) */
+             * (no product of two edge lengths: nothing underflows for a tiny, distant polygon);
+             * times 2^-shift: |c| 2^shift is exact (shift = 0 but for the rare case above) */
             double q[3], gxmu[3];
             shl__cross3(edges[e], g->mu[e], q);
-            for (int k = 0; k < 3; ++k) g->gvec[e][k] = q[k] / clen;
+            const double clen_shifted = shl__ldexp(clen, shift);
+            for (int k = 0; k < 3; ++k) {
+                g->gvec[e][k] = q[k] / clen_shifted;
+                g->gvec_max = fmax(g->gvec_max, fabs(g->gvec[e][k]));
+            }
             shl__cross3(g->gvec[e], g->mu[e], gxmu); /* f'(t) = w(t) . (g x mu) since w' = mu x w */
             g->fprime1[e] = shl__dot3(g->w[f], gxmu);
             /* I_0 = g . int_0^gamma w(t) dt = g . (w_e sin(gamma) + lambda_e (1 - cos(gamma))) */

@@ -26,6 +26,7 @@ typedef struct shl__poly_geom {
     double fprime1[SHL_MAX_VERTS];   /* f'(gamma_e) */
     double f_integral[SHL_MAX_VERTS]; /* I_0 = int_0^gamma f dt = f'(0) - f'(gamma) */
     double grad_scale[2];            /* product 2^-E: d/dx = 2^-E d/dx_scaled (shl__pow2_split) */
+    double gvec_max;                 /* max_e,k |gvec_e[k]| (0 when unset): shl__poly_hess_fold */
     /* near-plane sliver regime (polygon.c, shl__poly_zh_area): ZH integrals by a Gauss rule on the plane */
     int sliver;                      /* 1: the foot of x is outside the polygon, far from it, and |h| small */
     double nrm[3];                   /* unit normal of the plane */
@@ -80,7 +81,9 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
 static inline int shl__poly_hess_fold(const shl__poly_geom *g)
 {
     const double s = g->grad_scale[0] * g->grad_scale[1];
-    return s >= 0x1p-500 && s <= 0x1p500;
+    /* and no lane overflows: a gradient beyond ~2^900 in x units is summed in scaled units and
+     * unscaled at the end (+-inf where it is beyond DBL_MAX; folded, inf - inf gave NaN) */
+    return s >= 0x1p-500 && s <= 0x1p500 && g->gvec_max * s <= 0x1p900;
 }
 
 /* The same ZH integrals (double) as a planar integral, dw = |h| dA / r^3 (polygon.c);

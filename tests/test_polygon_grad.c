@@ -195,3 +195,65 @@ SHL_TEST(polygon_grad_in_plane_and_bad_input)
     CHECK(guard_intact(c, 26) && guard_intact(g, 76));
     shl_ctx_destroy(ctx);
 }
+
+/* A non-planar quad whose vertex 1, t (1, 3/4, 1/4), lies within t of x = 0, the whole
+ * scaled by 2^s (exact).  In scaled units (largest coordinate near 1) the point is t from
+ * the two edges' lines at vertex 1: at t = 2^-1040, 1/t overflowed there and the gradient
+ * was NaN (fuzz_lights-subnormal-vertex-distance-float-nan); with s = 100 the gradient in x
+ * units, ~2^940, is representable (at s = 0 it is not: +-inf, never NaN).  Reference: the same quad at t_ref = 2^-900, s = 0 (the
+ * ordinary path: nothing over/underflows); the gradient is A / t + O(1) near the vertex, so
+ * g(t, s) = 2^-s (t_ref / t) g_ref up to a relative O(t_ref) = 2^-900.  Tolerance: the
+ * scaled coordinates of vertex 1 and the cross products rel_1 x edge are subnormal, each
+ * rounded to 2^-1075 absolutely, a relative 2^-1075 / (t |edge| sin) (sin >= 1/4 here) in
+ * the direction w_1, the edge normals mu and |gvec|; a few of them per term: 64 2^-1074 / t
+ * relative (3.7e-9 at t = 2^-1040; measured up to 26 2^-1074 / t), for the coefficients
+ * (<= K_0 4 pi < 4) too, on top of their 1e-12 (test_polygon.c). */
+SHL_TEST(polygon_grad_nonplanar_vertex_subnormal_distance)
+{
+    enum { LMAX = 6, NC = SHL_NCOEFFS(LMAX) };
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    const double x[3] = {0, 0, 0};
+    double worst = 0.0;
+    int bad = 0, n_inf = 0;
+    const int t_exp[3] = {-1030, -1040, -1050};
+    for (int i = 0; i < 3; ++i) {
+        double v[12], vref[12], c[NC], g[3 * NC], cref[NC], gref[3 * NC];
+        const double quad[12] = {1, 0.2, 0.1, 1, 0.75, 0.25, 0.3, 1, 0.4, -0.2, 0.5, 1};
+        for (int k = 0; k < 12; ++k) {
+            const int near = k / 3 == 1;
+            v[k] = ldexp(quad[k], 100 + (near ? t_exp[i] : 0));
+            vref[k] = near ? ldexp(quad[k], -900) : quad[k];
+        }
+        CHECK(shl_polygon_grad(ctx, x, v, 4, c, g) == SHL_OK);
+        CHECK(shl_polygon_grad(ctx, x, vref, 4, cref, gref) == SHL_OK);
+        bad += !all_finite(g, 3 * NC) || !all_finite(c, NC);
+        const double ratio = ldexp(1.0, -900 - t_exp[i] - 100); /* 2^-s t_ref / t */
+        double err = 0.0, scale = 0.0;
+        for (int k = 0; k < 3 * NC; ++k) {
+            scale = fmax(scale, fabs(ratio * gref[k]));
+            err = fmax(err, fabs(g[k] - ratio * gref[k]));
+        }
+        const double tol = 64.0 * ldexp(1.0, -1074 - t_exp[i]);
+        bad += !(err <= tol * scale);
+        worst = fmax(worst, err / scale);
+        for (int k = 0; k < NC; ++k) bad += !(fabs(c[k] - cref[k]) <= 1e-12 + 4.0 * tol);
+        /* s = 0: the gradient, ~2^1036 in x units, is not representable: no NaN (summed in
+         * scaled units, unscaled at the end), +-inf where 2^-s (t_ref/t) g_ref >= 2^1025
+         * (beyond the tolerance's reach of DBL_MAX) */
+        for (int k = 0; k < 12; ++k) v[k] = k / 3 == 1 ? ldexp(quad[k], t_exp[i]) : quad[k];
+        CHECK(shl_polygon_grad(ctx, x, v, 4, c, g) == SHL_OK);
+        for (int k = 0; k < 3 * NC; ++k) {
+            const double beyond = ldexp(gref[k], -900 - t_exp[i] - 1); /* +-inf when >= 2^1025 */
+            bad += isnan(g[k]) || (isinf(beyond) && g[k] != beyond);
+            n_inf += isinf(beyond) != 0;
+        }
+    }
+    CHECK(bad == 0);
+    CHECK(n_inf > 0);
+    harness_note("vertex 2^-1030..2^-1050 from x (scaled units), gradient ~2^940 in x units: %d non-finite or "
+                 "outside the tolerance; max |g - 2^-s (t_ref/t) g_ref| / max |g| %.2g (tol 64 2^-1074 / t); "
+                 "at s = 0, %d entries beyond 2^1025: +-inf, no NaN",
+                 bad, worst, n_inf);
+    shl_ctx_destroy(ctx);
+}

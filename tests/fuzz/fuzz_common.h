@@ -364,6 +364,36 @@ static inline void fz_polygon_ex(fz_in *in, fz_poly *P, int as_float)
             if ((double)(float)P->v[i] != P->v[i]) P->exact = 0;
 }
 
+/* sum_e gamma_e / d_e (as fz_geom's gsum) for any polygon, planar or not, from its raw
+ * vertices in long double (no over/underflow for double input; rounding 2^-64 relative):
+ * gamma_e = the arc angle of edge e seen from x, d_e = the distance from x to its line, so
+ * |d L_lm / d x_a| <= K_l times it (moving-boundary bound: the arc's points move at most
+ * 1/ell(t) <= 1/d_e per unit of x).  Zero-length edges add nothing; INFINITY when x lies on
+ * an edge's line (or a vertex). */
+static inline long double fz_raw_grad_bound(const double *v, int n, const double x[3])
+{
+    long double sum = 0.0L;
+    for (int e = 0; e < n; ++e) {
+        const double *a = v + 3 * e, *b = v + 3 * ((e + 1) % n);
+        long double ra[3], rb[3], ed[3], c[3], cg[3];
+        for (int k = 0; k < 3; ++k) {
+            ra[k] = (long double)a[k] - x[k];
+            rb[k] = (long double)b[k] - x[k];
+            ed[k] = (long double)b[k] - a[k];
+        }
+        const long double elen = sqrtl(ed[0] * ed[0] + ed[1] * ed[1] + ed[2] * ed[2]);
+        if (elen == 0.0L) continue;
+        c[0] = ra[1] * ed[2] - ra[2] * ed[1], c[1] = ra[2] * ed[0] - ra[0] * ed[2], c[2] = ra[0] * ed[1] - ra[1] * ed[0];
+        const long double clen = sqrtl(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (clen == 0.0L) return INFINITY;
+        cg[0] = ra[1] * rb[2] - ra[2] * rb[1], cg[1] = ra[2] * rb[0] - ra[0] * rb[2], cg[2] = ra[0] * rb[1] - ra[1] * rb[0];
+        const long double gamma =
+            atan2l(sqrtl(cg[0] * cg[0] + cg[1] * cg[1] + cg[2] * cg[2]), ra[0] * rb[0] + ra[1] * rb[1] + ra[2] * rb[2]);
+        sum += gamma / (clen / elen);
+    }
+    return sum;
+}
+
 /* Independent long-double geometry of a structured, exact polygon seen from x:
  *   omega:   solid angle (fan of Van Oosterom-Strackee triangles; triple
  *            products = plane height x exact 2-D cross products),

@@ -25,6 +25,8 @@
  *    sum_i |rgb_ic| 16 DBL_MIN absolute, which a huge rgb magnifies;
  *  - finite outputs whenever sum |rgb| 4 pi K_30 (n for raw polygons) stays
  *    below 1e290 (any coordinates: the geometry is scaled by powers of two);
+ *    each polygon's shl_polygon_grad gradient finite whenever its moving-boundary
+ *    bound K_l sum_e gamma_e / d_e (fz_raw_grad_bound: planar or not) is below 1e290;
  *  - with structured polygons and spheres: |rgb_c,lm| <= sum_i |rgb_ic| (K_l
  *    Omega_i + slack_i + 16 DBL_MIN) (the bounds of fuzz_polygon.c /
  *    fuzz_sphere.c, and the underflow floor above);
@@ -272,6 +274,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 if (!li->two_sided && !polygon_front(li, x, &amb) && !amb) continue;
                 if (amb) comparable = 0;
                 FUZZ_CHECK(shl_polygon_grad(ctx, x, li->P.v, li->P.n, lc, lg) == SHL_OK, "polygon %d", i);
+                /* finite where K_l sum_e gamma_e / d_e is, with room (planar or not: from the vertices) */
+                if (fz_kl(lmax) * fz_raw_grad_bound(li->P.v, li->P.n, x) < 1e290L)
+                    FUZZ_CHECK(all_finite_d(lg, 3 * nc), "polygon %d: non-finite gradient", i);
             } else {
                 sphere_inside(li, x, &amb);
                 if (amb) comparable = 0;

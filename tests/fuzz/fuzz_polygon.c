@@ -6,7 +6,8 @@
  *    the input (NULL pointer, lmax, vertex count, non-finite coordinate);
  *  - on error nothing is written (guard-filled buffers byte-identical);
  *  - on success every output is finite (a gradient: when its bound below is
- *    under 1e290);
+ *    under 1e290; for raw, possibly non-planar polygons the same bound from the
+ *    vertices, fz_raw_grad_bound);
  *  - for structured (exactly planar, simple) polygons with moderate coordinates:
  *      |L_lm| <= K_l Omega + slack           (K_l = sqrt((2l+1)/(4 pi)) >= |Y_lm|)
  *      |L_00 - K_0 Omega| <= slack, |omega_lib - Omega| <= slack / K_0
@@ -60,10 +61,11 @@ static void check_polygon(const fz_poly *P, const double x[3], int lmax, const s
 
     fz_geom G;
     const int sane = P->structured && P->exact && fz_poly_geom(P, x, &G) && G.scale > 0.0L;
-    /* the gradient is finite whenever 1/distance is representable with room to spare */
-    double gmax_bound = INFINITY;
-    if (sane) gmax_bound = (double)(fz_kl(lmax) * G.gsum);
-    if (sane && gmax_bound < 1e290)
+    /* the gradient is finite whenever 1/distance is representable with room to spare: for
+     * any polygon (raw ones may be non-planar: the bound from their vertices) */
+    const long double gsum = sane ? G.gsum : fz_raw_grad_bound(P->v, P->n, x);
+    const double gmax_bound = (double)(fz_kl(lmax) * gsum);
+    if (gmax_bound < 1e290)
         FUZZ_CHECK(all_finite_d(g, 3 * nc), "non-finite gradient, lmax %d, bound %g", lmax, gmax_bound);
     if (!sane) goto done;
 
