@@ -117,17 +117,14 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
 {
     const int n = g->n, ndir = 2 * lmax + 1;
     const double sc = g->grad_scale[0] * g->grad_scale[1];
-    double norm[SHL_LMAX_MAX + 1], gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3],
-        s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
+    const shl__zh_band_consts *bc = shl__zh_bands(); /* the coefficient kernels' band constants, so their bits */
+    const double *norm = bc->norm, *s_b = bc->s_b, *s_s = bc->s_s; /* K_l; Wang Eq. 29 weights */
+    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
     for (int l = 0; l <= lmax; ++l) {
-        norm[l] = sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
         gnorm[l] = unscaled ? norm[l] * sc : norm[l];
         hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
-        s_b[l] = (2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)); /* Wang Eq. 29 weights */
-        s_s[l] = (l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0));
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
-    const shl__zh_band_consts *bc = shl__zh_bands(); /* the coefficient kernels' band constants, so their bits */
     hess_edge he[SHL_MAX_VERTS];
     shl__hess_edges_init(g, he);
     for (int d0 = 0; d0 < ndir; d0 += NL) {

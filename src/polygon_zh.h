@@ -59,21 +59,21 @@ void SUFFIX(shl__poly_zh)(const shl__poly_geom *g, int lmax, REAL *zh
 #endif
     /* bands whose edge integrals are needed: B_l up to lmax-1 (Eq. 29); the gradient needs l = lmax too */
     const int ltop = WITH_GRAD ? lmax : lmax - 1;
+    /* the double kernels' band constants (shl__zh_bands, polygon.h), rounded to REAL */
+    const shl__zh_band_consts *bc = shl__zh_bands();
     REAL norm[SHL_LMAX_MAX + 1], s_b[SHL_LMAX_MAX + 1], s_s[SHL_LMAX_MAX + 1];
     REAL twol_m1[SHL_LMAX_MAX + 1], leg_a[SHL_LMAX_MAX + 1], leg_b[SHL_LMAX_MAX + 1], b_alpha[SHL_LMAX_MAX + 1],
-        b_beta[SHL_LMAX_MAX + 1]; /* as shl__zh_bands (polygon.h) */
+        b_beta[SHL_LMAX_MAX + 1];
 #if WITH_GRAD
     REAL inv_lp1[SHL_LMAX_MAX + 1]; /* 1 / (l+1), Wu's I_l step */
-    for (int l = 0; l <= lmax; ++l) inv_lp1[l] = (REAL)(1.0 / (l + 1));
+    for (int l = 0; l <= lmax; ++l) inv_lp1[l] = (REAL)bc->inv_l[l + 1];
 #endif
     for (int l = 0; l <= lmax; ++l) {
-        const double den = l + (l == 0);
-        twol_m1[l] = (REAL)(2 * l - 1);
-        leg_a[l] = (REAL)((2.0 * l - 1.0) / den), leg_b[l] = (REAL)((l - 1.0) / den);
-        b_alpha[l] = (REAL)((2.0 * l - 1.0) / (den * den)), b_beta[l] = (REAL)((l - 1.0) * (l - 1.0) / (den * den));
-        norm[l] = (REAL)sqrt((2.0 * l + 1.0) / (4.0 * M_PI)); /* K_l */
-        s_b[l] = (REAL)((2.0 * l - 1.0) / (l * (l + 1.0) + (l == 0)));   /* Eq. 29 weights */
-        s_s[l] = (REAL)((l - 2.0) * (l - 1.0) / (l * (l + 1.0) + (l == 0)));
+        twol_m1[l] = (REAL)bc->twol_m1[l];
+        leg_a[l] = (REAL)bc->leg_a[l], leg_b[l] = (REAL)bc->leg_b[l];
+        b_alpha[l] = (REAL)bc->b_alpha[l], b_beta[l] = (REAL)bc->b_beta[l];
+        norm[l] = (REAL)bc->norm[l];                   /* K_l */
+        s_b[l] = (REAL)bc->s_b[l], s_s[l] = (REAL)bc->s_s[l]; /* Eq. 29 weights */
     }
     enum { NL = SHL__ZH_LANES };
     for (int d0 = 0; d0 < ndir; d0 += NL) {
