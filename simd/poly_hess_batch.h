@@ -44,9 +44,8 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
                                                             hv p, hv dp, hv ig, band_sums *sb, int first)
 {
     hv *hs = sb->hs, *gs = sb->gs;
-    const hv al = hv_set1(h->dff2) * p + hv_set1(h->ff2) * dp, bl = hv_set1(h->fe2) * p; /* (H6) */
-    const hv qw = il * hv_set1(2.0 * h->gw) - bl * hv_set1(h->dlw);
-    const hv ql = il * hv_set1(2.0 * h->gl) - al - bl * hv_set1(h->dll);
+    const hv qw = il * hv_set1(2.0 * h->gw) - hv_set1(h->cpw) * p; /* (H6) */
+    const hv ql = il * hv_set1(2.0 * h->gl) - hv_set1(h->cpl) * p - hv_set1(h->ff2) * dp;
 #pragma GCC unroll 6
     for (int i = 0; i < 6; ++i)
         hs[i] = sum_so_far(first, hs[i]) + (qw * hv_set1(h->tw[i]) + ql * hv_set1(h->tl[i]) - sm * hv_set1(h->tm[i]));

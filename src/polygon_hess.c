@@ -34,14 +34,19 @@
 #include <math.h>
 #include <pthread.h>
 
-/* x - sin x, x in [0, 2 pi]: Taylor series below 1 (terms fall by >= 20x; 9 terms
- * leave < 1e-20 relative), direct above (sin 1 / 1 = 0.84: at most 3 bits lost). */
-static double x_minus_sin(double x)
+/* x - sin x at x = 2 gamma, gamma in [0, pi], from sg = sin gamma and cg = cos gamma (a few
+ * ulps, polygon.c): Taylor series below x = 1 (terms fall by >= 20x; 9 terms leave < 1e-20
+ * relative; the factors 1/((k-1) k) rounded, 0.5 ulp each), sin x = 2 sg cg above (an error of
+ * a few ulps of 1 against x - sin x >= 1 - sin 1 = 0.16: at most 5 bits lost). */
+static double two_gamma_minus_sin(double gam, double sg, double cg)
 {
-    if (x >= 1.0) return x - sin(x);
+    static const double inv_fac[9] = {1.0 / 420, 1.0 / 342, 1.0 / 272, 1.0 / 210, 1.0 / 156,
+                                      1.0 / 110, 1.0 / 72,  1.0 / 42,  1.0 / 20}; /* 1/((k-1) k), k = 21, 19, .., 5 */
+    const double x = 2.0 * gam;
+    if (x >= 1.0) return x - 2.0 * sg * cg;
     const double x2 = x * x;
     double t = 1.0;
-    for (int k = 21; k >= 5; k -= 2) t = 1.0 - t * x2 / ((k - 1.0) * k); /* 1 - x^2/20 (1 - x^2/42 (...)) */
+    for (int i = 0; i < 9; ++i) t = 1.0 - t * x2 * inv_fac[i]; /* 1 - x^2/20 (1 - x^2/42 (...)) */
     return x * x2 / 6.0 * t;
 }
 
@@ -60,10 +65,13 @@ enum { NQ = SHL__HESS_NQ };
 #define NEAR_RADIAL 1e4
 typedef shl__hess_edge hess_edge;
 
+/* S(a, b) = (a b^T + b a^T) / 2: xx xy xz yy yz zz (the diagonal a_i b_i exactly) */
 static void sym6(const double a[3], const double b[3], double out[6])
 {
-    static const int ia[6] = {0, 0, 0, 1, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 2};
-    for (int i = 0; i < 6; ++i) out[i] = 0.5 * (a[ia[i]] * b[ib[i]] + a[ib[i]] * b[ia[i]]);
+    out[0] = a[0] * b[0], out[3] = a[1] * b[1], out[5] = a[2] * b[2];
+    out[1] = 0.5 * (a[0] * b[1] + a[1] * b[0]);
+    out[2] = 0.5 * (a[0] * b[2] + a[2] * b[0]);
+    out[4] = 0.5 * (a[1] * b[2] + a[2] * b[1]);
 }
 
 static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, const double *glw, hess_edge *h)
@@ -77,15 +85,16 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
     shl__cross3(mu, g->w[f], lf);  /* lambda_f */
     shl__cross3(mu, g->dw[e], dl); /* lambda_f - lambda_e */
     h->g2 = shl__dot3(gv, gv);
-    h->e0 = 0.5 * fe * fe * (gam + sg * cg) + 0.25 * fpe * fpe * x_minus_sin(2.0 * gam) + fe * fpe * sg * sg; /* (H5) */
+    h->e0 = 0.5 * fe * fe * (gam + sg * cg) + 0.25 * fpe * fpe * two_gamma_minus_sin(gam, sg, cg) + fe * fpe * sg * sg; /* (H5) */
     h->ffp1 = ff * g->fprime1[e];
     h->fe2 = fe * fe;
     h->ff2 = ff * ff;
-    h->dff2 = df * (ff + fe);
     h->gw = ff;                          /* g . w_f = f(T) */
     h->gl = g->fprime1[e];               /* g . lambda_f = f'(T) */
-    h->dlw = shl__dot3(dl, g->w[f]);
-    h->dll = shl__dot3(dl, lf);
+    /* (H6) as (f_f^2 - f_e^2 + f_e^2 (lambda_f - lambda_e) . lambda_f) P_l + f_f^2 dP_l along lambda_f,
+     * f_e^2 (lambda_f - lambda_e) . w_f P_l along w_f (g, lambda, w_f: in the arc's plane) */
+    h->cpw = h->fe2 * shl__dot3(dl, g->w[f]);
+    h->cpl = df * (ff + fe) + h->fe2 * shl__dot3(dl, lf);
     sym6(mu, g->w[f], h->tw);
     sym6(mu, lf, h->tl);
     sym6(mu, mu, h->tm);
@@ -224,14 +233,12 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
             const double mu[4] = {g->mu[e][0], g->mu[e][1], g->mu[e][2], 0.0};
             double tw[6], tl[6], tm[6];
             for (int i = 0; i < 6; ++i) tw[i] = h->tw[i], tl[i] = h->tl[i], tm[i] = h->tm[i];
-            const double gw2 = 2.0 * h->gw, gl2 = 2.0 * h->gl, dff2 = h->dff2, ff2 = h->ff2, fe2 = h->fe2;
-            const double dlw = h->dlw, dll = h->dll;
+            const double gw2 = 2.0 * h->gw, gl2 = 2.0 * h->gl, cpw = h->cpw, cpl = h->cpl, ff2 = h->ff2;
             for (int l = 0; l <= lmax; ++l) {
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
                     const double il = ih[l][k], sm = em[l][k];
-                    const double al = dff2 * ep[l][k] + ff2 * edp[l][k], bl = fe2 * ep[l][k]; /* (H6) */
-                    const double qw = il * gw2 - bl * dlw, ql = il * gl2 - al - bl * dll;
+                    const double qw = il * gw2 - cpw * ep[l][k], ql = il * gl2 - cpl * ep[l][k] - ff2 * edp[l][k]; /* (H6) */
                     double *hp = hsum[l][k], *gp = gsum[l][k];
 #pragma GCC unroll 6
                     for (int i = 0; i < 6; ++i) hp[i] += qw * tw[i] + ql * tl[i] - sm * tm[i];

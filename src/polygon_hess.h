@@ -11,7 +11,8 @@ enum { SHL__HESS_NQ = 8 };
 
 /* Per-edge quantities of (H2)-(H6), scaled units. */
 typedef struct {
-    double g2, e0, ffp1, fe2, ff2, dff2, gw, gl, dlw, dll;
+    double g2, e0, ffp1, fe2, ff2, gw, gl;
+    double cpw, cpl; /* (H6) along w_f and lambda_f: q_w = 2 I_l gw - cpw P_l, q_l = 2 I_l gl - cpl P_l - ff2 dP_l */
     double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
     int quad;                   /* E_l and I_l by the Gauss rule */
     double qc[SHL__HESS_NQ], qs[SHL__HESS_NQ]; /* its nodes t_j (cos, sin) */
