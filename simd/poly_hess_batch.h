@@ -46,9 +46,15 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
     hv *hs = sb->hs, *gs = sb->gs;
     const hv qw = il * hv_set1(2.0 * h->gw) - hv_set1(h->cpw) * p; /* (H6) */
     const hv ql = il * hv_set1(2.0 * h->gl) - hv_set1(h->cpl) * p - hv_set1(h->ff2) * dp;
-#pragma GCC unroll 6
-    for (int i = 0; i < 6; ++i)
-        hs[i] = sum_so_far(first, hs[i]) + (qw * hv_set1(h->tw[i]) + ql * hv_set1(h->tl[i]) - sm * hv_set1(h->tm[i]));
+    hv r[3];
+#pragma GCC unroll 3
+    for (int ax = 0; ax < 3; ++ax) r[ax] = qw * hv_set1(h->wf[ax]) + ql * hv_set1(h->lf[ax]) - sm * hv_set1(mu[ax]);
+    /* (H2) as S(mu, r): xx xy xz yy yz zz */
+    const hv m0 = hv_set1(mu[0]), m1 = hv_set1(mu[1]), m2 = hv_set1(mu[2]);
+    const hv h0 = hv_set1(h->hmu[0]), h1 = hv_set1(h->hmu[1]), h2 = hv_set1(h->hmu[2]);
+    hs[0] = sum_so_far(first, hs[0]) + m0 * r[0], hs[1] = sum_so_far(first, hs[1]) + (h0 * r[1] + h1 * r[0]);
+    hs[2] = sum_so_far(first, hs[2]) + (h0 * r[2] + h2 * r[0]), hs[3] = sum_so_far(first, hs[3]) + m1 * r[1];
+    hs[4] = sum_so_far(first, hs[4]) + (h1 * r[2] + h2 * r[1]), hs[5] = sum_so_far(first, hs[5]) + m2 * r[2];
 #pragma GCC unroll 3
     for (int ax = 0; ax < 3; ++ax) gs[ax] = sum_so_far(first, gs[ax]) + hv_set1(mu[ax]) * ig;
 }

@@ -65,15 +65,6 @@ enum { NQ = SHL__HESS_NQ };
 #define NEAR_RADIAL 1e4
 typedef shl__hess_edge hess_edge;
 
-/* S(a, b) = (a b^T + b a^T) / 2: xx xy xz yy yz zz (the diagonal a_i b_i exactly) */
-static void sym6(const double a[3], const double b[3], double out[6])
-{
-    out[0] = a[0] * b[0], out[3] = a[1] * b[1], out[5] = a[2] * b[2];
-    out[1] = 0.5 * (a[0] * b[1] + a[1] * b[0]);
-    out[2] = 0.5 * (a[0] * b[2] + a[2] * b[0]);
-    out[4] = 0.5 * (a[1] * b[2] + a[2] * b[1]);
-}
-
 static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, const double *glw, hess_edge *h)
 {
     const int f = (e + 1 == g->n) ? 0 : e + 1;
@@ -95,9 +86,7 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
      * f_e^2 (lambda_f - lambda_e) . w_f P_l along w_f (g, lambda, w_f: in the arc's plane) */
     h->cpw = h->fe2 * shl__dot3(dl, g->w[f]);
     h->cpl = df * (ff + fe) + h->fe2 * shl__dot3(dl, lf);
-    sym6(mu, g->w[f], h->tw);
-    sym6(mu, lf, h->tl);
-    sym6(mu, mu, h->tm);
+    for (int k = 0; k < 3; ++k) h->wf[k] = g->w[f][k], h->lf[k] = lf[k], h->hmu[k] = 0.5 * mu[k];
     h->quad = glx && h->g2 > NEAR_RADIAL * fmax(h->fe2, h->ff2);
     for (int j = 0; h->quad && j < NQ; ++j) {
         const double t = 0.5 * gam * (1.0 + glx[j]), c = cos(t), sn = sin(t), ft = fe * c + fpe * sn;
@@ -231,8 +220,6 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                 }
             const double(*ih)[NL] = h->quad ? (const double(*)[NL])eqi : (const double(*)[NL])ei; /* I_l of (H2) */
             const double mu[4] = {g->mu[e][0], g->mu[e][1], g->mu[e][2], 0.0};
-            double tw[6], tl[6], tm[6];
-            for (int i = 0; i < 6; ++i) tw[i] = h->tw[i], tl[i] = h->tl[i], tm[i] = h->tm[i];
             const double gw2 = 2.0 * h->gw, gl2 = 2.0 * h->gl, cpw = h->cpw, cpl = h->cpl, ff2 = h->ff2;
             for (int l = 0; l <= lmax; ++l) {
 #pragma GCC unroll 8
@@ -240,8 +227,12 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                     const double il = ih[l][k], sm = em[l][k];
                     const double qw = il * gw2 - cpw * ep[l][k], ql = il * gl2 - cpl * ep[l][k] - ff2 * edp[l][k]; /* (H6) */
                     double *hp = hsum[l][k], *gp = gsum[l][k];
-#pragma GCC unroll 6
-                    for (int i = 0; i < 6; ++i) hp[i] += qw * tw[i] + ql * tl[i] - sm * tm[i];
+                    double r[3];
+                    for (int ax = 0; ax < 3; ++ax) r[ax] = qw * h->wf[ax] + ql * h->lf[ax] - sm * mu[ax];
+                    /* (H2) as S(mu, r): xx xy xz yy yz zz */
+                    const double *hm = h->hmu;
+                    hp[0] += mu[0] * r[0], hp[1] += hm[0] * r[1] + hm[1] * r[0], hp[2] += hm[0] * r[2] + hm[2] * r[0];
+                    hp[3] += mu[1] * r[1], hp[4] += hm[1] * r[2] + hm[2] * r[1], hp[5] += mu[2] * r[2];
 #pragma GCC unroll 4
                     for (int ax = 0; ax < 4; ++ax) gp[ax] += mu[ax] * ei[l][k]; /* Wu Eq. 11 */
                 }

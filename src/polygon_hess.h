@@ -13,7 +13,7 @@ enum { SHL__HESS_NQ = 8 };
 typedef struct {
     double g2, e0, ffp1, fe2, ff2, gw, gl;
     double cpw, cpl; /* (H6) along w_f and lambda_f: q_w = 2 I_l gw - cpw P_l, q_l = 2 I_l gl - cpl P_l - ff2 dP_l */
-    double tw[6], tl[6], tm[6]; /* S(mu, w_f), S(mu, lambda_f), mu mu^T: xx xy xz yy yz zz */
+    double wf[3], lf[3], hmu[3]; /* w_f, lambda_f, mu / 2: H_e = S(mu, r) for r = q_w w_f + q_l lambda_f - s_m mu */
     int quad;                   /* E_l and I_l by the Gauss rule */
     double qc[SHL__HESS_NQ], qs[SHL__HESS_NQ]; /* its nodes t_j (cos, sin) */
     double qf[SHL__HESS_NQ], qw[SHL__HESS_NQ]; /* weights times f(t_j), f(t_j)^2 */
