@@ -44,11 +44,10 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
                                                             hv p, hv dp, hv ig, band_sums *sb, int first)
 {
     hv *hs = sb->hs, *gs = sb->gs;
-    const hv qw = il * hv_set1(2.0 * h->gw) - hv_set1(h->cpw) * p; /* (H6) */
-    const hv ql = il * hv_set1(2.0 * h->gl) - hv_set1(h->cpl) * p - hv_set1(h->ff2) * dp;
-    hv r[3];
+    hv r[3]; /* (H2) with (H6) */
 #pragma GCC unroll 3
-    for (int ax = 0; ax < 3; ++ax) r[ax] = qw * hv_set1(h->wf[ax]) + ql * hv_set1(h->lf[ax]) - sm * hv_set1(mu[ax]);
+    for (int ax = 0; ax < 3; ++ax)
+        r[ax] = il * hv_set1(h->tg[ax]) - p * hv_set1(h->bp[ax]) - dp * hv_set1(h->bd[ax]) - sm * hv_set1(mu[ax]);
     /* (H2) as S(mu, r): xx xy xz yy yz zz */
     const hv m0 = hv_set1(mu[0]), m1 = hv_set1(mu[1]), m2 = hv_set1(mu[2]);
     const hv h0 = hv_set1(h->hmu[0]), h1 = hv_set1(h->hmu[1]), h2 = hv_set1(h->hmu[2]);

@@ -80,13 +80,14 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
     h->ffp1 = ff * g->fprime1[e];
     h->fe2 = fe * fe;
     h->ff2 = ff * ff;
-    h->gw = ff;                          /* g . w_f = f(T) */
-    h->gl = g->fprime1[e];               /* g . lambda_f = f'(T) */
-    /* (H6) as (f_f^2 - f_e^2 + f_e^2 (lambda_f - lambda_e) . lambda_f) P_l + f_f^2 dP_l along lambda_f,
-     * f_e^2 (lambda_f - lambda_e) . w_f P_l along w_f (g, lambda, w_f: in the arc's plane) */
-    h->cpw = h->fe2 * shl__dot3(dl, g->w[f]);
-    h->cpl = df * (ff + fe) + h->fe2 * shl__dot3(dl, lf);
-    for (int k = 0; k < 3; ++k) h->wf[k] = g->w[f][k], h->lf[k] = lf[k], h->hmu[k] = 0.5 * mu[k];
+    /* (H6): [f^2 P_l lambda] = P_l(a_e) bp + dP_l bd */
+    const double dff2 = df * (ff + fe);
+    for (int k = 0; k < 3; ++k) {
+        h->tg[k] = 2.0 * gv[k];
+        h->bp[k] = dff2 * lf[k] + h->fe2 * dl[k];
+        h->bd[k] = h->ff2 * lf[k];
+        h->hmu[k] = 0.5 * mu[k];
+    }
     h->quad = glx && h->g2 > NEAR_RADIAL * fmax(h->fe2, h->ff2);
     for (int j = 0; h->quad && j < NQ; ++j) {
         const double t = 0.5 * gam * (1.0 + glx[j]), c = cos(t), sn = sin(t), ft = fe * c + fpe * sn;
@@ -220,15 +221,13 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                 }
             const double(*ih)[NL] = h->quad ? (const double(*)[NL])eqi : (const double(*)[NL])ei; /* I_l of (H2) */
             const double mu[4] = {g->mu[e][0], g->mu[e][1], g->mu[e][2], 0.0};
-            const double gw2 = 2.0 * h->gw, gl2 = 2.0 * h->gl, cpw = h->cpw, cpl = h->cpl, ff2 = h->ff2;
             for (int l = 0; l <= lmax; ++l) {
 #pragma GCC unroll 8
                 for (int k = 0; k < NL; ++k) {
                     const double il = ih[l][k], sm = em[l][k];
-                    const double qw = il * gw2 - cpw * ep[l][k], ql = il * gl2 - cpl * ep[l][k] - ff2 * edp[l][k]; /* (H6) */
                     double *hp = hsum[l][k], *gp = gsum[l][k];
-                    double r[3];
-                    for (int ax = 0; ax < 3; ++ax) r[ax] = qw * h->wf[ax] + ql * h->lf[ax] - sm * mu[ax];
+                    double r[3]; /* (H2) with (H6) */
+                    for (int ax = 0; ax < 3; ++ax) r[ax] = il * h->tg[ax] - ep[l][k] * h->bp[ax] - edp[l][k] * h->bd[ax] - sm * mu[ax];
                     /* (H2) as S(mu, r): xx xy xz yy yz zz */
                     const double *hm = h->hmu;
                     hp[0] += mu[0] * r[0], hp[1] += hm[0] * r[1] + hm[1] * r[0], hp[2] += hm[0] * r[2] + hm[2] * r[0];
