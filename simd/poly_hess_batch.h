@@ -192,7 +192,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             const hv af = hv_dot(u, g->w[f]), da = hv_dot(u, g->dw[e]), v = hv_dot(u, g->gvec[e]);
             const hv s = a * hv_set1(g->sin_gamma[e]) - b * hv_set1(g->cos_gamma[e]);
             const hv b1 = a * hv_set1(g->sin_gamma[e]) + b * hv_set1(g->omc_gamma[e]); /* B_1, Wang Eq. 27 */
-            const hv e0 = hv_set1(h->e0), g2 = hv_set1(h->g2), ffp1 = hv_set1(h->ffp1), te0 = hv_set1(2.0 * h->e0);
+            const hv e0 = hv_set1(h->e0), g2 = hv_set1(h->g2), ffp1 = hv_set1(h->ffp1), ffd = hv_set1(h->ffd);
             /* edges seen end-on: E_l, I_l of (H2) by the Gauss rule, and c M_l (H4) from them
              * (qi, qm: I_l and c M_l of (H2), else from the recurrence below) */
             const int quad = h->quad;
@@ -227,7 +227,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             /* l = 0 and 1 of Wu's I, J and of (H3)-(H4) */
             hv i1 = (v * gamma - (fp1 * da - i0 * a)) / hv_set1(2.0);
             hv j1 = i0, j2 = hv_set1(0.0), m2 = hv_set1(0.0), m1 = e0; /* M_0, M_1 = E_0 */
-            hv e1 = (v * i0 - ffp1 * da + te0 * a + g2 * (b1 - gamma * a)) / hv_set1(3.0); /* E_1 */
+            hv e1 = (v * i0 - ffp1 * da - ffd * a + g2 * b1) / hv_set1(3.0); /* E_1 */
             /* I_l and c M_l of (H2): the rule's (quad) or the recurrence's (selected, not stored:
              * a vector stored and loaded back costs a store-to-load round trip per band) */
             hess_add(h, mu, quad ? qi[0] : i0, quad ? qm[0] : hv_set1(0.0), hv_set1(1.0), hv_set1(0.0), i0, &sum[0], first);
@@ -242,7 +242,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
                 /* Eq. 30 with Eq. 31's C_{l-1} = (X + (l-1) B_{l-2}) / l: B_l = alpha X + beta B_{l-2} */
                 const hv bl = hv_set1(bc->b_alpha[l]) * (b1 * p1 + s * dp1 - c2 * d1) + hv_set1(bc->b_beta[l]) * bb2;
                 const hv ml = tlm1 * e1 + m2;                                                       /* (H4) */
-                const hv el = (v * jl - m1 - ffp1 * dpl + te0 * pl + g2 * (bl - gamma * pl)) * hv_set1(inv_l[l + 2]); /* (H3) */
+                const hv el = (v * jl - m1 - ffp1 * dpl - ffd * pl + g2 * bl) * hv_set1(inv_l[l + 2]); /* (H3) */
                 sum[l].bs = sum_so_far(first, sum[l].bs) + c * bl;
                 hess_add(h, mu, quad ? qi[l] : il, quad ? qm[l] : c * ml, pl, dpl, il, &sum[l], first);
                 p2 = p1, p1 = pl, dp2 = dp1, dp1 = dpl;

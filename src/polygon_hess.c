@@ -78,6 +78,7 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
     h->g2 = shl__dot3(gv, gv);
     h->e0 = 0.5 * fe * fe * (gam + sg * cg) + 0.25 * fpe * fpe * two_gamma_minus_sin(gam, sg, cg) + fe * fpe * sg * sg; /* (H5) */
     h->ffp1 = ff * g->fprime1[e];
+    h->ffd = h->g2 * gam - 2.0 * h->e0;
     h->fe2 = fe * fe;
     h->ff2 = ff * ff;
     /* (H6): [f^2 P_l lambda] = P_l(a_e) bp + dP_l bd */
@@ -180,7 +181,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                 i1[k] = (v[k] * gamma - (fp1 * da[k] - i0 * ae)) / 2.0;
                 j1[k] = i0, j2[k] = 0.0;
                 m2[k] = 0.0, m1[k] = h->e0; /* M_0, M_1 = E_0 */
-                e1[k] = (v[k] * i0 - h->ffp1 * da[k] + 2.0 * h->e0 * ae + h->g2 * (b1[k] - gamma * ae)) / 3.0; /* E_1 */
+                e1[k] = (v[k] * i0 - h->ffp1 * da[k] - h->ffd * ae + h->g2 * b1[k]) / 3.0; /* E_1 */
                 ei[0][k] = i0, em[0][k] = 0.0, ep[0][k] = 1.0, edp[0][k] = 0.0;
                 if (lmax >= 1) ei[1][k] = i1[k], em[1][k] = ce * h->e0, ep[1][k] = ae, edp[1][k] = da[k];
             }
@@ -198,7 +199,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                         bc->b_alpha[l] * (b1[k] * p1[k] + s[k] * dp1[k] - c2[k] * d1[k]) + bc->b_beta[l] * bb2[k];
                     const double ml = tlm1 * e1[k] + m2[k];                                              /* (H4) */
                     /* (H3) with [f f' P_l] = (f f')(T) dP_l + (G2 T - 2 E_0) P_l(a_e) */
-                    const double el = (v[k] * jl - m1[k] - h->ffp1 * dpl + 2.0 * h->e0 * pl + h->g2 * (bl - gamma * pl)) *
+                    const double el = (v[k] * jl - m1[k] - h->ffp1 * dpl - h->ffd * pl + h->g2 * bl) *
                                       inv_l[l + 2];
                     bsum[l][k] += c[k] * bl;
                     ei[l][k] = il, em[l][k] = c[k] * ml, ep[l][k] = pl, edp[l][k] = dpl;
