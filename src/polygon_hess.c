@@ -25,9 +25,11 @@
  * (J_l, B_l as in polygon_zh.h), the ends written as in polygon_zh.h so that no O(1)
  * terms cancel: [f f' P_l] = (f f')(T) dP_l + [f f'] P_l(a_e), [f f'] = G2 T - 2 E_0, and
  *   [f^2 P_l lambda] = ((f_f^2 - f_e^2) P_l(a_e) + f_f^2 dP_l) lambda_f + f_e^2 P_l(a_e) (lambda_f - lambda_e),   (H6)
- * lambda_f - lambda_e = mu x (w_f - w_e), f_f - f_e = g . (w_f - w_e).  Every vector of (H2)
- * but mu lies in the arc's plane, spanned by w_f and lambda_f, so per edge, lobe and band
- * H_e = q_w S(mu, w_f) + q_l S(mu, lambda_f) + s_m mu mu^T (three scalars). */
+ * lambda_f - lambda_e = mu x (w_f - w_e), f_f - f_e = g . (w_f - w_e).  With S(mu, mu) = mu mu^T,
+ * per edge, lobe and band H_e = S(mu, r), r = 2 I_l g - P_l(a_e) b_p - dP_l b_d - c M_l mu, from
+ * the edge's vectors b_p = (f_f^2 - f_e^2) lambda_f + f_e^2 (lambda_f - lambda_e), b_d = f_f^2 lambda_f
+ * (H6): three components of r, then six of S (18 multiplies, as the three tensors S(mu, w_f),
+ * S(mu, lambda_f), mu mu^T times three scalars, but 12 edge constants instead of 18). */
 #include "polygon_hess.h"
 #include "quad.h"
 #include "zh_tables.h"
