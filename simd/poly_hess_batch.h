@@ -48,12 +48,11 @@ __attribute__((always_inline)) static inline void hess_add(const shl__hess_edge 
 #pragma GCC unroll 3
     for (int ax = 0; ax < 3; ++ax)
         r[ax] = il * hv_set1(h->tg[ax]) - p * hv_set1(h->bp[ax]) - dp * hv_set1(h->bd[ax]) - sm * hv_set1(mu[ax]);
-    /* (H2) as S(mu, r): xx xy xz yy yz zz */
+    /* (H2) as S(mu, r): xx xy xz yy yz zz, off the diagonal 2 S (halved with hnorm, as the reference) */
     const hv m0 = hv_set1(mu[0]), m1 = hv_set1(mu[1]), m2 = hv_set1(mu[2]);
-    const hv h0 = hv_set1(h->hmu[0]), h1 = hv_set1(h->hmu[1]), h2 = hv_set1(h->hmu[2]);
-    hs[0] = sum_so_far(first, hs[0]) + m0 * r[0], hs[1] = sum_so_far(first, hs[1]) + (h0 * r[1] + h1 * r[0]);
-    hs[2] = sum_so_far(first, hs[2]) + (h0 * r[2] + h2 * r[0]), hs[3] = sum_so_far(first, hs[3]) + m1 * r[1];
-    hs[4] = sum_so_far(first, hs[4]) + (h1 * r[2] + h2 * r[1]), hs[5] = sum_so_far(first, hs[5]) + m2 * r[2];
+    hs[0] = sum_so_far(first, hs[0]) + m0 * r[0], hs[1] = sum_so_far(first, hs[1]) + (m0 * r[1] + m1 * r[0]);
+    hs[2] = sum_so_far(first, hs[2]) + (m0 * r[2] + m2 * r[0]), hs[3] = sum_so_far(first, hs[3]) + m1 * r[1];
+    hs[4] = sum_so_far(first, hs[4]) + (m1 * r[2] + m2 * r[1]), hs[5] = sum_so_far(first, hs[5]) + m2 * r[2];
 #pragma GCC unroll 3
     for (int ax = 0; ax < 3; ++ax) gs[ax] = sum_so_far(first, gs[ax]) + hv_set1(mu[ax]) * ig;
 }
@@ -160,10 +159,11 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
     /* band constants tabulated once (shl__zh_bands: the reference's expressions, so its bits) */
     const shl__zh_band_consts *bc = shl__zh_bands();
     const double *norm = bc->norm, *s_b = bc->s_b, *s_s = bc->s_s;
-    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
+    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], hhalf[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
     for (int l = 0; l <= lmax; ++l) {
         gnorm[l] = unscaled ? norm[l] * sc : norm[l];
         hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
+        hhalf[l] = 0.5 * hnorm[l]; /* off-diagonal sums of 2 S (hess_add) */
         inv_l[l] = bc->inv_l[l];
     }
     inv_l[lmax + 1] = 1.0 / (lmax + 1), inv_l[lmax + 2] = 1.0 / (lmax + 2); /* past the table at SHL_LMAX_MAX */
@@ -267,7 +267,7 @@ void SHL_ISA_SUFFIX(shl__poly_hess)(const struct shl__poly_geom *g, int lmax, in
             }
 #pragma GCC unroll 6
             for (int i = 0; i < 6; ++i) {
-                const hv ho = hv_set1(hnorm[l]) * sum[l].hs[i]; /* (H2) */
+                const hv ho = hv_set1(i == 1 || i == 2 || i == 4 ? hhalf[l] : hnorm[l]) * sum[l].hs[i]; /* (H2) */
                 memcpy(zl + (4 + i) * (lmax + 1) * dp, &ho, sizeof ho);
             }
         }

@@ -89,7 +89,6 @@ static void hess_edge_init(const shl__poly_geom *g, int e, const double *glx, co
         h->tg[k] = 2.0 * gv[k];
         h->bp[k] = dff2 * lf[k] + h->fe2 * dl[k];
         h->bd[k] = h->ff2 * lf[k];
-        h->hmu[k] = 0.5 * mu[k];
     }
     h->quad = glx && h->g2 > NEAR_RADIAL * fmax(h->fe2, h->ff2);
     for (int j = 0; h->quad && j < NQ; ++j) {
@@ -121,10 +120,11 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
     const double sc = g->grad_scale[0] * g->grad_scale[1];
     const shl__zh_band_consts *bc = shl__zh_bands(); /* the coefficient kernels' band constants, so their bits */
     const double *norm = bc->norm, *s_b = bc->s_b, *s_s = bc->s_s; /* K_l; Wang Eq. 29 weights */
-    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
+    double gnorm[SHL_LMAX_MAX + 1], hnorm[SHL_LMAX_MAX + 1], hhalf[SHL_LMAX_MAX + 1], inv_l[SHL_LMAX_MAX + 3];
     for (int l = 0; l <= lmax; ++l) {
         gnorm[l] = unscaled ? norm[l] * sc : norm[l];
         hnorm[l] = unscaled ? norm[l] * sc * sc : norm[l];
+        hhalf[l] = 0.5 * hnorm[l]; /* off-diagonal sums of 2 S(mu, r): the same bits as S, halved by a power of two */
     }
     for (int l = 0; l <= lmax + 2; ++l) inv_l[l] = 1.0 / (l + (l == 0));
     hess_edge he[SHL_MAX_VERTS];
@@ -231,10 +231,9 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                     double *hp = hsum[l][k], *gp = gsum[l][k];
                     double r[3]; /* (H2) with (H6) */
                     for (int ax = 0; ax < 3; ++ax) r[ax] = il * h->tg[ax] - ep[l][k] * h->bp[ax] - edp[l][k] * h->bd[ax] - sm * mu[ax];
-                    /* (H2) as S(mu, r): xx xy xz yy yz zz */
-                    const double *hm = h->hmu;
-                    hp[0] += mu[0] * r[0], hp[1] += hm[0] * r[1] + hm[1] * r[0], hp[2] += hm[0] * r[2] + hm[2] * r[0];
-                    hp[3] += mu[1] * r[1], hp[4] += hm[1] * r[2] + hm[2] * r[1], hp[5] += mu[2] * r[2];
+                    /* (H2) as S(mu, r): xx xy xz yy yz zz, off the diagonal 2 S (halved with hnorm) */
+                    hp[0] += mu[0] * r[0], hp[1] += mu[0] * r[1] + mu[1] * r[0], hp[2] += mu[0] * r[2] + mu[2] * r[0];
+                    hp[3] += mu[1] * r[1], hp[4] += mu[1] * r[2] + mu[2] * r[1], hp[5] += mu[2] * r[2];
 #pragma GCC unroll 4
                     for (int ax = 0; ax < 4; ++ax) gp[ax] += mu[ax] * ei[l][k]; /* Wu Eq. 11 */
                 }
@@ -251,7 +250,7 @@ void shl__poly_zh_hess_d(const shl__poly_geom *g, int lmax, double *z10, int uns
                 double *o = z10 + SHL__Z10(lmax, d0 + k, l);
                 o[0] = norm[l] * surf[l][k]; /* Wang Eq. 13 */
                 for (int ax = 0; ax < 3; ++ax) o[1 + ax] = gnorm[l] * gsum[l][k][ax];
-                for (int i = 0; i < 6; ++i) o[4 + i] = hnorm[l] * hsum[l][k][i]; /* (H2) */
+                for (int i = 0; i < 6; ++i) o[4 + i] = (i == 1 || i == 2 || i == 4 ? hhalf[l] : hnorm[l]) * hsum[l][k][i]; /* (H2) */
             }
     }
     if (g->sliver && lmax <= SHL__AREA_LMAX) { /* coefficients as shl__poly_zh_grad_d */

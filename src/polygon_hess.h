@@ -12,8 +12,8 @@ enum { SHL__HESS_NQ = 8 };
 /* Per-edge quantities of (H2)-(H6), scaled units. */
 typedef struct {
     double g2, e0, ffp1, fe2, ff2, ffd; /* ffd = [f f'] = G2 T - 2 E_0 (H3) */
-    /* H_e = S(mu, r), r = 2 I_l g - P_l(a_e) bp - dP_l bd - c M_l mu (H2, H6); hmu = mu / 2 */
-    double tg[3], bp[3], bd[3], hmu[3];
+    /* H_e = S(mu, r), r = 2 I_l g - P_l(a_e) bp - dP_l bd - c M_l mu (H2, H6) */
+    double tg[3], bp[3], bd[3];
     int quad;                   /* E_l and I_l by the Gauss rule */
     double qc[SHL__HESS_NQ], qs[SHL__HESS_NQ]; /* its nodes t_j (cos, sin) */
     double qf[SHL__HESS_NQ], qw[SHL__HESS_NQ]; /* weights times f(t_j), f(t_j)^2 */
