@@ -29,7 +29,8 @@
  * per edge, lobe and band H_e = S(mu, r), r = 2 I_l g - P_l(a_e) b_p - dP_l b_d - c M_l mu, from
  * the edge's vectors b_p = (f_f^2 - f_e^2) lambda_f + f_e^2 (lambda_f - lambda_e), b_d = f_f^2 lambda_f
  * (H6): three components of r, then six of S (18 multiplies, as the three tensors S(mu, w_f),
- * S(mu, lambda_f), mu mu^T times three scalars, but 12 edge constants instead of 18). */
+ * S(mu, lambda_f), mu mu^T times three scalars, but 9 edge constants and mu instead of 18).  The
+ * off-diagonal sums hold 2 S, halved with the band weight (a power of two: the same values). */
 #include "polygon_hess.h"
 #include "quad.h"
 #include "zh_tables.h"
