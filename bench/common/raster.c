@@ -7,7 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { TILE = 32, CHUNK = 4096 };
+/* FRAG_BOX: a record whose box holds at most this many pixel centres is resolved in setup into the
+ * fragments of its covered centres (most triangles of a dense mesh are smaller than a pixel) */
+enum { TILE = 32, CHUNK = 4096, FRAG_BOX = 1 };
 
 int framebuf_init(framebuf *fb, int w, int h)
 {
@@ -19,7 +21,7 @@ int framebuf_init(framebuf *fb, int w, int h)
     fb->tri = malloc(sizeof(int) * n);
     fb->bary = malloc(sizeof(float) * 3 * n);
     fb->back = malloc(n);
-    for (int i = 0; i < 4; ++i) {
+    for (size_t i = 0; i < sizeof fb->work / sizeof *fb->work; ++i) {
         fb->work[i] = NULL;
         fb->work_len[i] = 0;
     }
@@ -35,7 +37,7 @@ void framebuf_free(framebuf *fb)
     free(fb->tri);
     free(fb->bary);
     free(fb->back);
-    for (int i = 0; i < 4; ++i) free(fb->work[i]);
+    for (size_t i = 0; i < sizeof fb->work / sizeof *fb->work; ++i) free(fb->work[i]);
     memset(fb, 0, sizeof *fb);
 }
 
@@ -48,6 +50,15 @@ typedef struct {
     int mesh, tri;       /* tri: as fb->tri reports it (raster_mesh.tri_id) */
     unsigned char back, fan; /* fan: which record of a clipped triangle */
 } rtri;
+
+/* A covered pixel centre of a small record, resolved in setup: what the depth test and the
+ * buffer write need, the values tile_job would compute for it. */
+typedef struct {
+    double iw;     /* interpolated 1 / view depth (the depth test compares it before rounding) */
+    float bary[3];
+    int x, y, mesh, tri;
+    unsigned char back, fan;
+} frag;
 
 /* A vertex seen by the camera: screen position (valid when z >= znear) and view depth. */
 typedef struct {
@@ -76,16 +87,22 @@ typedef struct {
     pkey *key;        /* their pixel-centre keys */
     int keyed;        /* the frame fits the keys' shorts */
     int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
-    long maxlist;     /* longest tile list */
-    void *tile_buf;   /* per worker: 3 maxlist words (sort_order), the maxlist-long order, then maxlist records (a tile's, in list order) */
+    long maxlist, maxfrags; /* longest tile list, most fragments of a tile */
+    size_t tile_buf_len; /* per worker */
+    void *tile_buf;   /* per worker: maxlist records (a tile's, in list order), 2 maxlist keys and 2 maxlist
+                         indices (sort_keys), the same for maxfrags fragments */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
-    long *chunk_count; /* their number */
-    long *bin;         /* per group and tile: its records' references to the tile, then where they go */
+    long *chunk_count; /* their number; -1: out of memory */
+    frag **chunk_frags; /* per chunk: its fragments, in triangle order */
+    long *chunk_nfrags; /* their number */
+    long *bin;         /* per group: per tile its records' references, then per tile its fragments (counts,
+                          then where they go) */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     long *cand;        /* per worker: CHUNK triangles the keys do not reject */
-    long *tile_first;
+    long *tile_first, *frag_first;
     const rtri **tile_list;
+    frag *tile_frags;  /* the fragments, tile by tile */
     int tiles_x, tiles_y, ntiles;
     framebuf *fb;
 } ctx_t;
@@ -231,23 +248,119 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
     return emitted;
 }
 
+/* A record's edge functions. */
+typedef struct {
+    double area, ax[3], ay[3], ex[3], ey[3], sg[3];
+    int bias[3];
+} edges;
+
+static void edge_setup(const rtri *r, edges *e)
+{
+    e->area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
+    for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
+        const int a = (k + 1) % 3, b = (k + 2) % 3;
+        const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
+        /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
+         * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
+         * products and get exactly opposite values, so no pixel centre falls between them */
+        const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
+        const int lo = fwd ? a : b, hi = fwd ? b : a;
+        e->ax[k] = r->x[lo];
+        e->ay[k] = r->y[lo];
+        e->ex[k] = r->x[hi] - r->x[lo];
+        e->ey[k] = r->y[hi] - r->y[lo];
+        e->sg[k] = fwd ? -1.0 : 1.0;
+        e->bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
+    }
+}
+
+/* 1 when pixel (x, y)'s centre is inside the record; then w[k] = lambda_k / view depth_k, the
+ * perspective-correct weights before normalization. */
+static int pixel_weights(const rtri *r, const edges *e, int x, int y, double w[3])
+{
+    const double px = x + 0.5, py = y + 0.5;
+    double l[3];
+    for (int k = 0; k < 3; ++k) {
+        l[k] = e->sg[k] * ((px - e->ax[k]) * e->ey[k] - (py - e->ay[k]) * e->ex[k]);
+        if (!(l[k] > 0 || (l[k] == 0 && e->bias[k]))) return 0;
+    }
+    for (int k = 0; k < 3; ++k) w[k] = l[k] / e->area * r->iw[k];
+    return 1;
+}
+
+/* The source triangle's barycentrics at a pixel of weights w, iw = w0 + w1 + w2. */
+static void pixel_bary(const rtri *r, const double w[3], double iw, float bary[3])
+{
+    for (int j = 0; j < 3; ++j) bary[j] = (float)((w[0] * r->b[0][j] + w[1] * r->b[1][j] + w[2] * r->b[2][j]) / iw);
+}
+
+static int tile_of(const ctx_t *c, int x, int y) { return y / TILE * c->tiles_x + x / TILE; }
+
 /* tile: each tile the record's pixel box [x0, x1) x [y0, y1) meets, row by row. */
 #define FOR_TILES(c, r, tile) \
     for (int ty_ = (r)->y0 / TILE; ty_ <= ((r)->y1 - 1) / TILE; ++ty_) \
         for (int tx_ = (r)->x0 / TILE, tile = ty_ * (c)->tiles_x + tx_; tx_ <= ((r)->x1 - 1) / TILE; ++tx_, ++tile)
 
+/* A block of memory shrunk to `bytes` (kept as it is if realloc fails); NULL and freed when bytes is 0. */
+static void *shrink(void *block, size_t bytes)
+{
+    if (!bytes) {
+        free(block);
+        return NULL;
+    }
+    void *fit = realloc(block, bytes);
+    return fit ? fit : block;
+}
+
+/* The records recs[0 .. n) of setup_tri whose box holds at most FRAG_BOX pixel centres become the
+ * fragments of their covered centres, appended at frags[*nf]; the others are kept, moved to the
+ * front.  bin: the group's counters (records per tile, then fragments per tile).  Returns the
+ * number of records kept. */
+static int resolve_small(const ctx_t *c, rtri *recs, int n, frag *frags, long *nf, long *bin)
+{
+    int kept = 0;
+    for (int i = 0; i < n; ++i) {
+        const rtri *r = &recs[i];
+        if ((long)(r->x1 - r->x0) * (r->y1 - r->y0) > FRAG_BOX) {
+            FOR_TILES(c, r, t) ++bin[t];
+            if (kept != i) recs[kept] = *r;
+            ++kept;
+            continue;
+        }
+        edges e;
+        edge_setup(r, &e);
+        for (int y = r->y0; y < r->y1; ++y)
+            for (int x = r->x0; x < r->x1; ++x) {
+                double w[3];
+                if (!pixel_weights(r, &e, x, y, w)) continue;
+                frag *f = &frags[(*nf)++];
+                f->iw = w[0] + w[1] + w[2];
+                pixel_bary(r, w, f->iw, f->bary);
+                f->x = x;
+                f->y = y;
+                f->mesh = r->mesh;
+                f->tri = r->tri;
+                f->back = r->back;
+                f->fan = r->fan;
+                ++bin[c->ntiles + tile_of(c, x, y)];
+            }
+    }
+    return kept;
+}
+
 /* Set up the triangles of chunks [begin, end) (one group): the keys reject the triangles without
- * a pixel centre in their box, the others' records go to a block for 2 records a candidate, then
- * shrunk to their number; the group's references per tile are counted for the binning. */
+ * a pixel centre in their box, the others' records go to a block for 2 records a candidate and
+ * their fragments (resolve_small) to a block for 2 FRAG_BOX a candidate, both then shrunk to their
+ * number; the group's references and fragments per tile are counted for the binning. */
 static void setup_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     const long ntri = c->first_tri[c->nmeshes];
     pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
-    long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * (size_t)c->ntiles;
+    long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * 2 * (size_t)c->ntiles;
     for (long ch = begin; ch < end; ++ch) {
         const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
-        long n = 0, nc = 0;
+        long n = 0, nc = 0, nf = 0;
         int m = 0;
         /* loops without data-dependent branches keep many of these scattered loads in flight */
         for (long g = g0; g < g1; ++g) {
@@ -269,126 +382,140 @@ static void setup_job(void *arg, int worker, long begin, long end)
             for (int k = 0; k < 3; ++k) corner[3 * i + k] = pv[tv[k]];
         }
         rtri *recs = nc ? malloc(sizeof(rtri) * 2 * (size_t)nc) : NULL; /* at most 2 records a triangle */
-        if (nc && !recs) {
-            c->chunk_count[ch] = 1; /* a count without records: out of memory, seen by raster_draw */
+        frag *frags = nc ? malloc(sizeof(frag) * 2 * FRAG_BOX * (size_t)nc) : NULL;
+        if (nc && (!recs || !frags)) {
+            free(recs);
+            free(frags);
+            c->chunk_count[ch] = -1; /* out of memory, seen by raster_draw */
             continue;
         }
         m = 0;
         for (long i = 0; i < nc; ++i) {
             while (cand[i] >= c->first_tri[m + 1]) ++m;
-            n += setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, recs + n);
+            const int emitted = setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, recs + n);
+            n += resolve_small(c, recs + n, emitted, frags, &nf, bin);
         }
-        for (long i = 0; i < n; ++i) FOR_TILES(c, &recs[i], t) ++bin[t];
-        rtri *fit = n ? realloc(recs, sizeof(rtri) * (size_t)n) : NULL; /* shrinking; NULL: n is 0, or out of memory */
-        if (!fit) free(recs);
-        c->chunk_recs[ch] = fit;
+        c->chunk_recs[ch] = shrink(recs, sizeof(rtri) * (size_t)n);
         c->chunk_count[ch] = n;
+        c->chunk_frags[ch] = shrink(frags, sizeof(frag) * (size_t)nf);
+        c->chunk_nfrags[ch] = nf;
     }
 }
 
-/* The group's references into the tile lists, from the offsets the prefix sum left in bin. */
+/* The group's references and fragments into the tile lists, from the offsets the prefix sum left in bin. */
 static void bin_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
     ctx_t *c = arg;
-    long *bin = c->bin + (size_t)(begin / c->group) * (size_t)c->ntiles;
-    for (long ch = begin; ch < end; ++ch)
+    long *bin = c->bin + (size_t)(begin / c->group) * 2 * (size_t)c->ntiles;
+    for (long ch = begin; ch < end; ++ch) {
         for (long i = 0; i < c->chunk_count[ch]; ++i) {
             const rtri *r = &c->chunk_recs[ch][i];
             FOR_TILES(c, r, t) c->tile_list[bin[t]++] = r;
         }
+        for (long i = 0; i < c->chunk_nfrags[ch]; ++i) {
+            const frag *f = &c->chunk_frags[ch][i];
+            c->tile_frags[bin[c->ntiles + tile_of(c, f->x, f->y)]++] = *f;
+        }
+    }
 }
 
-/* order[0 .. n): the indices of rec[0 .. n) sorted by (mesh, tri, fan), i.e. the order the
- * unreordered meshes give: LSD radix sort on 11-bit digits of the key (first_tri[mesh] + tri) * 2 + fan.
- * buf: 3 n words (keys twice, then the other index array). */
-static void sort_order(const ctx_t *c, const rtri *rec, long n, long *order, void *buf)
+/* The drawing order of a record or fragment: that of the unreordered meshes' triangles (tri is
+ * raster_mesh.tri_id's), then the fan record. */
+static uint64_t order_key(const ctx_t *c, int mesh, int tri, int fan)
+{
+    return (uint64_t)(c->first_tri[mesh] + tri) << 1 | (uint64_t)fan;
+}
+
+/* order[0 .. n): the indices of key[0 .. n) in key order (stable LSD radix sort on 11-bit digits);
+ * returns the keys in that order.  key and order hold 2 n words each, the second n scratch.  The
+ * tile lists are in key order already unless a mesh is reordered. */
+static const uint64_t *sort_keys(const ctx_t *c, uint64_t *key, long *order, long n)
 {
     enum { BITS = 11, RADIX = 1 << BITS };
-    uint64_t *key[2] = {buf, (uint64_t *)buf + n};
-    long *idx[2] = {order, (long *)((uint64_t *)buf + 2 * n)};
-    for (long i = 0; i < n; ++i) {
-        key[0][i] = ((uint64_t)(c->first_tri[rec[i].mesh] + rec[i].tri) << 1) | rec[i].fan;
-        idx[0][i] = i;
-    }
+    for (long i = 0; i < n; ++i) order[i] = i;
+    if (!c->sort) return key;
+    uint64_t *k[2] = {key, key + n};
+    long *idx[2] = {order, order + n};
     const uint64_t top = (uint64_t)c->first_tri[c->nmeshes] << 1;
     int from = 0;
     for (int shift = 0; shift == 0 || top >> shift; shift += BITS, from ^= 1) {
         long count[RADIX + 1] = {0};
-        for (long i = 0; i < n; ++i) ++count[(key[from][i] >> shift & (RADIX - 1)) + 1];
+        for (long i = 0; i < n; ++i) ++count[(k[from][i] >> shift & (RADIX - 1)) + 1];
         for (int d = 0; d < RADIX; ++d) count[d + 1] += count[d];
         for (long i = 0; i < n; ++i) {
-            const long at = count[key[from][i] >> shift & (RADIX - 1)]++;
-            key[from ^ 1][at] = key[from][i];
+            const long at = count[k[from][i] >> shift & (RADIX - 1)]++;
+            k[from ^ 1][at] = k[from][i];
             idx[from ^ 1][at] = idx[from][i];
         }
     }
     if (from) memcpy(order, idx[1], sizeof(long) * (size_t)n);
+    return k[from];
 }
 
-/* Rasterize the records binned to one tile in the order of the unreordered meshes' triangles
- * (the z-buffer keeps the first of equal depths: deterministic ties). */
+/* The z-buffer keeps the first of equal depths (deterministic ties): pixel p gets the fragment
+ * when its 1 / depth iw is larger; bary is then written by the caller. */
+static int depth_test_store(framebuf *fb, size_t p, double iw, int mesh, int tri, unsigned char back)
+{
+    if (!(iw > fb->depth[p])) return 0;
+    fb->depth[p] = (float)iw;
+    fb->mesh[p] = mesh;
+    fb->tri[p] = tri;
+    fb->back[p] = back;
+    return 1;
+}
+
+/* The record's pixels within [x0, x1) x [y0, y1). */
+static void draw_record(const ctx_t *c, const rtri *r, int x0, int y0, int x1, int y1)
+{
+    edges e;
+    edge_setup(r, &e);
+    x0 = r->x0 > x0 ? r->x0 : x0;
+    x1 = r->x1 < x1 ? r->x1 : x1;
+    y0 = r->y0 > y0 ? r->y0 : y0;
+    y1 = r->y1 < y1 ? r->y1 : y1;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            double w[3];
+            if (!pixel_weights(r, &e, x, y, w)) continue;
+            const size_t p = (size_t)y * (size_t)c->w + (size_t)x;
+            const double iw = w[0] + w[1] + w[2];
+            if (depth_test_store(c->fb, p, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
+        }
+}
+
+/* Rasterize one tile: its records and fragments merged in the order of the unreordered meshes'
+ * triangles. */
 static void tile_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     framebuf *fb = c->fb;
-    uint64_t *buf = (uint64_t *)c->tile_buf + (4 * (size_t)c->maxlist + sizeof(rtri) / 8 * (size_t)c->maxlist) * (size_t)worker;
-    long *order = (long *)(buf + 3 * (size_t)c->maxlist);
-    rtri *local = (rtri *)(buf + 4 * (size_t)c->maxlist);
+    rtri *local = (rtri *)((char *)c->tile_buf + c->tile_buf_len * (size_t)worker);
+    uint64_t *rkey = (uint64_t *)(local + c->maxlist), *fkey = rkey + 4 * (size_t)c->maxlist;
+    long *rorder = (long *)(rkey + 2 * (size_t)c->maxlist), *forder = (long *)(fkey + 2 * (size_t)c->maxfrags);
     for (long tile = begin; tile < end; ++tile) {
         const rtri **list = c->tile_list + c->tile_first[tile];
         const long n = c->tile_first[tile + 1] - c->tile_first[tile];
+        const frag *fr = c->tile_frags + c->frag_first[tile];
+        const long nf = c->frag_first[tile + 1] - c->frag_first[tile];
         /* the tile's records gathered first, in memory order (independent loads, many misses in
          * flight), then sorted in the cache by index */
-        for (long i = 0; i < n; ++i) local[i] = *list[i];
-        if (c->sort) sort_order(c, local, n, order, buf);
-        else
-            for (long i = 0; i < n; ++i) order[i] = i;
+        for (long i = 0; i < n; ++i) {
+            local[i] = *list[i];
+            rkey[i] = order_key(c, local[i].mesh, local[i].tri, local[i].fan);
+        }
+        for (long i = 0; i < nf; ++i) fkey[i] = order_key(c, fr[i].mesh, fr[i].tri, fr[i].fan);
+        const uint64_t *rk = sort_keys(c, rkey, rorder, n), *fk = sort_keys(c, fkey, forder, nf);
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
-        for (long i = 0; i < n; ++i) {
-            const rtri *r = &local[order[i]];
-            const double area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
-            double ax[3], ay[3], ex[3], ey[3], sg[3];
-            int bias[3];
-            for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
-                const int a = (k + 1) % 3, b = (k + 2) % 3;
-                const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
-                /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
-                 * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
-                 * products and get exactly opposite values, so no pixel centre falls between them */
-                const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
-                const int lo = fwd ? a : b, hi = fwd ? b : a;
-                ax[k] = r->x[lo];
-                ay[k] = r->y[lo];
-                ex[k] = r->x[hi] - r->x[lo];
-                ey[k] = r->y[hi] - r->y[lo];
-                sg[k] = fwd ? -1.0 : 1.0;
-                bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
+        for (long i = 0, j = 0; i < n || j < nf;) {
+            if (j == nf || (i < n && rk[i] < fk[j])) {
+                draw_record(c, &local[rorder[i++]], tx0, ty0, tx1, ty1);
+                continue;
             }
-            const int x0 = r->x0 > tx0 ? r->x0 : tx0, x1 = r->x1 < tx1 ? r->x1 : tx1;
-            const int y0 = r->y0 > ty0 ? r->y0 : ty0, y1 = r->y1 < ty1 ? r->y1 : ty1;
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    const double px = x + 0.5, py = y + 0.5;
-                    double l[3];
-                    int inside = 1;
-                    for (int k = 0; k < 3 && inside; ++k) {
-                        l[k] = sg[k] * ((px - ax[k]) * ey[k] - (py - ay[k]) * ex[k]);
-                        inside = l[k] > 0 || (l[k] == 0 && bias[k]);
-                    }
-                    if (!inside) continue;
-                    const size_t p = (size_t)y * (size_t)c->w + (size_t)x;
-                    const double w0 = l[0] / area * r->iw[0], w1 = l[1] / area * r->iw[1], w2 = l[2] / area * r->iw[2];
-                    const double iw = w0 + w1 + w2;
-                    if (!(iw > fb->depth[p])) continue;
-                    fb->depth[p] = (float)iw;
-                    fb->mesh[p] = r->mesh;
-                    fb->tri[p] = r->tri;
-                    fb->back[p] = r->back;
-                    for (int j = 0; j < 3; ++j)
-                        fb->bary[3 * p + j] = (float)((w0 * r->b[0][j] + w1 * r->b[1][j] + w2 * r->b[2][j]) / iw);
-                }
+            const frag *f = &fr[forder[j++]];
+            const size_t p = (size_t)f->y * (size_t)c->w + (size_t)f->x;
+            if (depth_test_store(fb, p, f->iw, f->mesh, f->tri, f->back)) memcpy(fb->bary + 3 * p, f->bary, sizeof f->bary);
         }
     }
 }
@@ -442,52 +569,63 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.tiles_x = (fb->w + TILE - 1) / TILE;
     c.tiles_y = (fb->h + TILE - 1) / TILE;
     const int ntiles = c.ntiles = c.tiles_x * c.tiles_y;
-    c.group = 1 + (long)((double)nchunks * ntiles / (1 << 21)); /* at most ~2M bin counters */
+    c.group = 1 + (long)((double)nchunks * 2 * ntiles / (1 << 21)); /* at most ~2M bin counters */
     c.ngroups = (nchunks + c.group - 1) / c.group;
     c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
     c.key = work(fb, 1, sizeof(pkey) * (size_t)(c.first_vert[nmeshes] + 1));
     c.chunk_recs = calloc((size_t)nchunks + 1, sizeof(rtri *));
-    c.chunk_count = malloc(sizeof(long) * (size_t)(nchunks + 1));
-    c.bin = calloc((size_t)c.ngroups * (size_t)ntiles + 1, sizeof(long));
+    c.chunk_count = malloc(sizeof(long) * 2 * (size_t)(nchunks + 1));
+    c.chunk_nfrags = c.chunk_count + nchunks + 1;
+    c.chunk_frags = calloc((size_t)nchunks + 1, sizeof(frag *));
+    c.bin = calloc((size_t)c.ngroups * 2 * (size_t)ntiles + 1, sizeof(long));
     c.corners = work(fb, 2, (sizeof(pvert) * 3 + sizeof(long)) * CHUNK * (size_t)nw);
-    if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.bin || !c.corners) goto done;
+    if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.chunk_frags || !c.bin || !c.corners) goto done;
     c.cand = (long *)(c.corners + 3 * CHUNK * (size_t)nw);
     par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
     par_for(nchunks, c.group, nw, setup_job, &c);
     for (long ch = 0; ch < nchunks; ++ch)
-        if (c.chunk_count[ch] && !c.chunk_recs[ch]) goto done;
-    c.tile_first = malloc(sizeof(long) * ((size_t)ntiles + 1));
+        if (c.chunk_count[ch] < 0) goto done;
+    c.tile_first = malloc(sizeof(long) * 2 * ((size_t)ntiles + 1));
     if (!c.tile_first) goto done;
-    long refs = 0; /* binning: tile lists in tile order, each in record order (group by group) */
+    c.frag_first = c.tile_first + ntiles + 1;
+    long refs = 0, frags = 0; /* binning: tile lists in tile order, each in record order (group by group) */
     for (int t = 0; t < ntiles; ++t) {
         c.tile_first[t] = refs;
+        c.frag_first[t] = frags;
         for (long gr = 0; gr < c.ngroups; ++gr) {
-            long *b = &c.bin[(size_t)gr * (size_t)ntiles + (size_t)t];
-            const long k = *b;
+            long *b = &c.bin[(size_t)gr * 2 * (size_t)ntiles + (size_t)t], *bf = b + ntiles;
+            const long k = *b, kf = *bf;
             *b = refs;
+            *bf = frags;
             refs += k;
+            frags += kf;
         }
+        c.maxlist = refs - c.tile_first[t] > c.maxlist ? refs - c.tile_first[t] : c.maxlist;
+        c.maxfrags = frags - c.frag_first[t] > c.maxfrags ? frags - c.frag_first[t] : c.maxfrags;
     }
     c.tile_first[ntiles] = refs;
-    c.tile_list = malloc(sizeof(rtri *) * (size_t)(refs ? refs : 1));
-    if (!c.tile_list) goto done;
+    c.frag_first[ntiles] = frags;
+    c.tile_list = work(fb, 4, sizeof(rtri *) * (size_t)(refs + 1));
+    c.tile_frags = work(fb, 5, sizeof(frag) * (size_t)(frags + 1));
+    if (!c.tile_list || !c.tile_frags) goto done;
     par_for(nchunks, c.group, nw, bin_job, &c);
     for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
-    for (int t = 0; t < ntiles; ++t)
-        c.maxlist = c.tile_first[t + 1] - c.tile_first[t] > c.maxlist ? c.tile_first[t + 1] - c.tile_first[t] : c.maxlist;
-    if (!(c.tile_buf = work(fb, 3, (sizeof(uint64_t) * 4 + sizeof(rtri)) * (size_t)(c.maxlist + 1) * (size_t)nw))) goto done;
+    c.tile_buf_len = sizeof(rtri) * (size_t)c.maxlist + sizeof(uint64_t) * 4 * (size_t)(c.maxlist + c.maxfrags);
+    if (!(c.tile_buf = work(fb, 3, c.tile_buf_len * (size_t)nw + 1))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
     free(c.first_tri);
     free(c.first_vert);
-    if (c.chunk_recs)
-        for (long ch = 0; ch < c.nchunks; ++ch) free(c.chunk_recs[ch]);
+    for (long ch = 0; ch < c.nchunks; ++ch) {
+        if (c.chunk_recs) free(c.chunk_recs[ch]);
+        if (c.chunk_frags) free(c.chunk_frags[ch]);
+    }
     free(c.chunk_recs);
+    free(c.chunk_frags);
     free(c.chunk_count);
     free(c.bin);
     free(c.tile_first);
-    free(c.tile_list);
     return st;
 }
 
