@@ -100,6 +100,7 @@ typedef struct {
                           then where they go) */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     long *cand;        /* per worker: CHUNK triangles the keys do not reject */
+    pkey *cand_box;    /* their keys' box: min cx, max fx, min cy, max fy of the corners */
     long *tile_first, *frag_first;
     const rtri **tile_list;
     frag *tile_frags;  /* the fragments, tile by tile */
@@ -160,17 +161,41 @@ static void project_job(void *arg, int worker, long begin, long end)
     }
 }
 
+/* The pixel centres x0 <= x < x1, y0 <= y < y1 in the box of the triangle id of (sx, sy); 0 if none. */
+static int pixel_box(const ctx_t *c, const double *sx, const double *sy, const int id[3], int *x0, int *x1, int *y0, int *y1)
+{
+    double minx = 1e300, maxx = -1e300, miny = 1e300, maxy = -1e300;
+    for (int k = 0; k < 3; ++k) {
+        minx = sx[id[k]] < minx ? sx[id[k]] : minx; /* finite coordinates: as fmin, fmax */
+        maxx = sx[id[k]] > maxx ? sx[id[k]] : maxx;
+        miny = sy[id[k]] < miny ? sy[id[k]] : miny;
+        maxy = sy[id[k]] > maxy ? sy[id[k]] : maxy;
+    }
+    /* as fmax(0, .) and fmin(w, .), NaN included, without the library calls */
+    const double cx = ceil(minx - 0.5), fx = floor(maxx - 0.5) + 1.0, cy = ceil(miny - 0.5), fy = floor(maxy - 0.5) + 1.0;
+    const double bx0 = cx > 0.0 ? cx : 0.0, bx1 = fx < c->w ? fx : (double)c->w;
+    const double by0 = cy > 0.0 ? cy : 0.0, by1 = fy < c->h ? fy : (double)c->h;
+    if (bx0 >= bx1 || by0 >= by1) return 0;
+    *x0 = (int)bx0;
+    *x1 = (int)bx1;
+    *y0 = (int)by0;
+    *y1 = (int)by1;
+    return 1;
+}
+
 /* Clip the triangle to forward >= znear, project, and emit up to 2 records; returns the count.
  * pv: its corners' projections (project_job); a triangle wholly in front of the near plane
- * (the common case) uses them, the same values the clipping path computes. */
-static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
+ * (the common case) uses them, the same values the clipping path computes.  box: the corners'
+ * keys combined (setup_job); when all three are keys (cx >= 0), the pixel box of such a triangle. */
+static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pkey *box, rtri *out)
 {
     const raster_mesh *rm = &c->meshes[m];
     const int *tv = rm->tri + 3 * (size_t)t;
     double sx[4], sy[4], z[4];
     float b[4][3];
     int n = 0;
-    if (pv[0].z >= c->znear && pv[1].z >= c->znear && pv[2].z >= c->znear) {
+    const int unclipped = pv[0].z >= c->znear && pv[1].z >= c->znear && pv[2].z >= c->znear;
+    if (unclipped) {
         for (int k = 0; k < 3; ++k) {
             sx[k] = pv[k].sx;
             sy[k] = pv[k].sy;
@@ -210,18 +235,14 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
     int emitted = 0;
     for (int f = 1; f + 1 < n; ++f) {
         const int id[3] = {0, f, f + 1};
-        double minx = 1e300, maxx = -1e300, miny = 1e300, maxy = -1e300;
-        for (int k = 0; k < 3; ++k) {
-            minx = sx[id[k]] < minx ? sx[id[k]] : minx; /* finite coordinates: as fmin, fmax */
-            maxx = sx[id[k]] > maxx ? sx[id[k]] : maxx;
-            miny = sy[id[k]] < miny ? sy[id[k]] : miny;
-            maxy = sy[id[k]] > maxy ? sy[id[k]] : maxy;
-        }
-        /* as fmax(0, .) and fmin(w, .), NaN included, without the library calls */
-        const double cx = ceil(minx - 0.5), fx = floor(maxx - 0.5) + 1.0, cy = ceil(miny - 0.5), fy = floor(maxy - 0.5) + 1.0;
-        const double x0 = cx > 0.0 ? cx : 0.0, x1 = fx < c->w ? fx : (double)c->w;
-        const double y0 = cy > 0.0 ? cy : 0.0, y1 = fy < c->h ? fy : (double)c->h;
-        if (x0 >= x1 || y0 >= y1) continue;
+        int x0, x1, y0, y1;
+        if (unclipped && box->cx >= 0) { /* the same box (pkey) */
+            x0 = box->cx;
+            x1 = box->fx + 1;
+            y0 = box->cy;
+            y1 = box->fy + 1;
+        } else if (!pixel_box(c, sx, sy, id, &x0, &x1, &y0, &y1))
+            continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
         if (area == 0.0) continue;
         if (out) {
@@ -234,10 +255,10 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], rtri *out)
                 r->iw[k] = (float)(1.0 / z[order[k]]);
                 memcpy(r->b[k], b[order[k]], sizeof r->b[k]);
             }
-            r->x0 = (int)x0;
-            r->x1 = (int)x1;
-            r->y0 = (int)y0;
-            r->y1 = (int)y1;
+            r->x0 = x0;
+            r->x1 = x1;
+            r->y0 = y0;
+            r->y1 = y1;
             r->mesh = m;
             r->tri = rm->tri_id ? rm->tri_id[t] : t;
             r->back = !swap;
@@ -357,22 +378,28 @@ static void setup_job(void *arg, int worker, long begin, long end)
     ctx_t *c = arg;
     const long ntri = c->first_tri[c->nmeshes];
     pvert *corner = c->corners + 3 * CHUNK * (size_t)worker;
+    pkey *cand_box = c->cand_box + CHUNK * (size_t)worker;
     long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * 2 * (size_t)c->ntiles;
     for (long ch = begin; ch < end; ++ch) {
         const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
         long n = 0, nc = 0, nf = 0;
         int m = 0;
-        /* loops without data-dependent branches keep many of these scattered loads in flight */
-        for (long g = g0; g < g1; ++g) {
+        for (long g = g0; g < g1;) { /* mesh by mesh */
             while (g >= c->first_tri[m + 1]) ++m;
+            const long mesh_end = c->first_tri[m + 1] < g1 ? c->first_tri[m + 1] : g1;
             const int *tv = c->meshes[m].tri + 3 * (size_t)(g - c->first_tri[m]);
-            const pkey *k = c->key + c->first_vert[m], *a = &k[tv[0]], *b = &k[tv[1]], *d = &k[tv[2]];
-            const int maxfx = a->fx > b->fx ? a->fx : b->fx, mincx = a->cx < b->cx ? a->cx : b->cx;
-            const int maxfy = a->fy > b->fy ? a->fy : b->fy, mincy = a->cy < b->cy ? a->cy : b->cy;
-            const int empty = (maxfx > d->fx ? maxfx : d->fx) < (mincx < d->cx ? mincx : d->cx) ||
-                              (maxfy > d->fy ? maxfy : d->fy) < (mincy < d->cy ? mincy : d->cy);
-            cand[nc] = g;
-            nc += !empty;
+            const pkey *k = c->key + c->first_vert[m];
+            /* no data-dependent branches: many of these scattered loads stay in flight */
+            for (; g < mesh_end; ++g, tv += 3) {
+                const pkey *a = &k[tv[0]], *b = &k[tv[1]], *d = &k[tv[2]];
+                const int maxfx = a->fx > b->fx ? a->fx : b->fx, mincx = a->cx < b->cx ? a->cx : b->cx;
+                const int maxfy = a->fy > b->fy ? a->fy : b->fy, mincy = a->cy < b->cy ? a->cy : b->cy;
+                const pkey box = {(short)(mincx < d->cx ? mincx : d->cx), (short)(maxfx > d->fx ? maxfx : d->fx),
+                                  (short)(mincy < d->cy ? mincy : d->cy), (short)(maxfy > d->fy ? maxfy : d->fy)};
+                cand[nc] = g;
+                cand_box[nc] = box;
+                nc += (box.fx >= box.cx) & (box.fy >= box.cy);
+            }
         }
         m = 0;
         for (long i = 0; i < nc; ++i) {
@@ -392,7 +419,7 @@ static void setup_job(void *arg, int worker, long begin, long end)
         m = 0;
         for (long i = 0; i < nc; ++i) {
             while (cand[i] >= c->first_tri[m + 1]) ++m;
-            const int emitted = setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, recs + n);
+            const int emitted = setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, &cand_box[i], recs + n);
             n += resolve_small(c, recs + n, emitted, frags, &nf, bin);
         }
         c->chunk_recs[ch] = shrink(recs, sizeof(rtri) * (size_t)n);
@@ -578,9 +605,10 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.chunk_nfrags = c.chunk_count + nchunks + 1;
     c.chunk_frags = calloc((size_t)nchunks + 1, sizeof(frag *));
     c.bin = calloc((size_t)c.ngroups * 2 * (size_t)ntiles + 1, sizeof(long));
-    c.corners = work(fb, 2, (sizeof(pvert) * 3 + sizeof(long)) * CHUNK * (size_t)nw);
+    c.corners = work(fb, 2, (sizeof(pvert) * 3 + sizeof(long) + sizeof(pkey)) * CHUNK * (size_t)nw);
     if (!c.pv || !c.key || !c.chunk_recs || !c.chunk_count || !c.chunk_frags || !c.bin || !c.corners) goto done;
     c.cand = (long *)(c.corners + 3 * CHUNK * (size_t)nw);
+    c.cand_box = (pkey *)(c.cand + CHUNK * (size_t)nw);
     par_for(c.first_vert[nmeshes], 8192, nw, project_job, &c);
     par_for(nchunks, c.group, nw, setup_job, &c);
     for (long ch = 0; ch < nchunks; ++ch)
