@@ -86,11 +86,10 @@ typedef struct {
     pvert *pv;        /* every mesh's vertices, projected once per draw */
     pkey *key;        /* their pixel-centre keys */
     int keyed;        /* the frame fits the keys' shorts */
-    int sort;         /* a mesh is reordered (tri_id): tile lists go back to the unreordered order */
     long maxlist, maxfrags; /* longest tile list, most fragments of a tile */
     size_t tile_buf_len; /* per worker */
-    void *tile_buf;   /* per worker: maxlist records (a tile's, in list order), 2 maxlist keys and 2 maxlist
-                         indices (sort_keys), the same for maxfrags fragments */
+    void *tile_buf;   /* per worker: maxlist records (a tile's, in list order), then 2 (maxlist + maxfrags)
+                         keys and as many indices (sort_keys) */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
     long *chunk_count; /* their number; -1: out of memory */
@@ -454,14 +453,13 @@ static uint64_t order_key(const ctx_t *c, int mesh, int tri, int fan)
     return (uint64_t)(c->first_tri[mesh] + tri) << 1 | (uint64_t)fan;
 }
 
-/* order[0 .. n): the indices of key[0 .. n) in key order (stable LSD radix sort on 11-bit digits);
- * returns the keys in that order.  key and order hold 2 n words each, the second n scratch.  The
- * tile lists are in key order already unless a mesh is reordered. */
-static const uint64_t *sort_keys(const ctx_t *c, uint64_t *key, long *order, long n)
+/* order[0 .. n): the indices of key[0 .. n) in key order (stable LSD radix sort on 8-bit digits:
+ * a tile has a few hundred keys); the keys are left in an unspecified order.  key and order hold
+ * 2 n words each, the second n scratch. */
+static void sort_keys(const ctx_t *c, uint64_t *key, long *order, long n)
 {
-    enum { BITS = 11, RADIX = 1 << BITS };
+    enum { BITS = 8, RADIX = 1 << BITS };
     for (long i = 0; i < n; ++i) order[i] = i;
-    if (!c->sort) return key;
     uint64_t *k[2] = {key, key + n};
     long *idx[2] = {order, order + n};
     const uint64_t top = (uint64_t)c->first_tri[c->nmeshes] << 1;
@@ -477,7 +475,6 @@ static const uint64_t *sort_keys(const ctx_t *c, uint64_t *key, long *order, lon
         }
     }
     if (from) memcpy(order, idx[1], sizeof(long) * (size_t)n);
-    return k[from];
 }
 
 /* The z-buffer keeps the first of equal depths (deterministic ties): pixel p gets the fragment
@@ -511,15 +508,14 @@ static void draw_record(const ctx_t *c, const rtri *r, int x0, int y0, int x1, i
         }
 }
 
-/* Rasterize one tile: its records and fragments merged in the order of the unreordered meshes'
- * triangles. */
+/* Rasterize one tile: its records and fragments in the order of the unreordered meshes' triangles. */
 static void tile_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     framebuf *fb = c->fb;
     rtri *local = (rtri *)((char *)c->tile_buf + c->tile_buf_len * (size_t)worker);
-    uint64_t *rkey = (uint64_t *)(local + c->maxlist), *fkey = rkey + 4 * (size_t)c->maxlist;
-    long *rorder = (long *)(rkey + 2 * (size_t)c->maxlist), *forder = (long *)(fkey + 2 * (size_t)c->maxfrags);
+    uint64_t *key = (uint64_t *)(local + c->maxlist);
+    long *order = (long *)(key + 2 * (size_t)(c->maxlist + c->maxfrags));
     for (long tile = begin; tile < end; ++tile) {
         const rtri **list = c->tile_list + c->tile_first[tile];
         const long n = c->tile_first[tile + 1] - c->tile_first[tile];
@@ -527,20 +523,20 @@ static void tile_job(void *arg, int worker, long begin, long end)
         const long nf = c->frag_first[tile + 1] - c->frag_first[tile];
         /* the tile's records gathered first, in memory order (independent loads, many misses in
          * flight), then sorted in the cache by index */
-        for (long i = 0; i < n; ++i) {
-            local[i] = *list[i];
-            rkey[i] = order_key(c, local[i].mesh, local[i].tri, local[i].fan);
-        }
-        for (long i = 0; i < nf; ++i) fkey[i] = order_key(c, fr[i].mesh, fr[i].tri, fr[i].fan);
-        const uint64_t *rk = sort_keys(c, rkey, rorder, n), *fk = sort_keys(c, fkey, forder, nf);
+        for (long i = 0; i < n; ++i) local[i] = *list[i];
+        /* the records (indices 0 .. n), then the fragments (n .. n + nf) */
+        for (long i = 0; i < n; ++i) key[i] = order_key(c, local[i].mesh, local[i].tri, local[i].fan);
+        for (long i = 0; i < nf; ++i) key[n + i] = order_key(c, fr[i].mesh, fr[i].tri, fr[i].fan);
+        sort_keys(c, key, order, n + nf);
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
-        for (long i = 0, j = 0; i < n || j < nf;) {
-            if (j == nf || (i < n && rk[i] < fk[j])) {
-                draw_record(c, &local[rorder[i++]], tx0, ty0, tx1, ty1);
+        for (long i = 0; i < n + nf; ++i) {
+            const long item = order[i];
+            if (item < n) {
+                draw_record(c, &local[item], tx0, ty0, tx1, ty1);
                 continue;
             }
-            const frag *f = &fr[forder[j++]];
+            const frag *f = &fr[item - n];
             const size_t p = (size_t)f->y * (size_t)c->w + (size_t)f->x;
             if (depth_test_store(fb, p, f->iw, f->mesh, f->tri, f->back)) memcpy(fb->bary + 3 * p, f->bary, sizeof f->bary);
         }
@@ -637,7 +633,6 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.tile_frags = work(fb, 5, sizeof(frag) * (size_t)(frags + 1));
     if (!c.tile_list || !c.tile_frags) goto done;
     par_for(nchunks, c.group, nw, bin_job, &c);
-    for (int m = 0; m < nmeshes; ++m) c.sort |= meshes[m].tri_id != NULL;
     c.tile_buf_len = sizeof(rtri) * (size_t)c.maxlist + sizeof(uint64_t) * 4 * (size_t)(c.maxlist + c.maxfrags);
     if (!(c.tile_buf = work(fb, 3, c.tile_buf_len * (size_t)nw + 1))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
