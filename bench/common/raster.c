@@ -7,9 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* FRAG_BOX: a record whose box holds at most this many pixel centres is resolved in setup into the
- * fragments of its covered centres (most triangles of a dense mesh are smaller than a pixel) */
-enum { TILE = 32, CHUNK = 4096, FRAG_BOX = 1 };
+enum { TILE = 32, CHUNK = 4096 };
 
 int framebuf_init(framebuf *fb, int w, int h)
 {
@@ -51,7 +49,7 @@ typedef struct {
     unsigned char back, fan; /* fan: which record of a clipped triangle */
 } rtri;
 
-/* A covered pixel centre of a small record, resolved in setup: what the depth test and the
+/* The covered pixel centre of a record whose box holds one pixel centre, resolved in setup: what the depth test and the
  * buffer write need, the values tile_job would compute for it. */
 typedef struct {
     double iw;     /* interpolated 1 / view depth (the depth test compares it before rounding) */
@@ -142,21 +140,27 @@ static short key_floor(double s, int n)
 static void project_job(void *arg, int worker, long begin, long end)
 {
     (void)worker;
-    ctx_t *c = arg;
+    const ctx_t *c = arg;
+    const ctx_t cam = *c; /* a copy the stores below cannot alias: its doubles stay in registers */
     int m = 0;
-    for (long g = begin; g < end; ++g) {
-        while (g >= c->first_vert[m + 1]) ++m;
-        double v[3];
-        view_space(c, c->meshes[m].pos + 3 * (g - c->first_vert[m]), v);
-        pvert *q = &c->pv[g];
-        pkey *k = &c->key[g];
-        q->z = v[2];
-        q->sx = v[2] >= c->znear ? screen_x(c, v) : 0.0;
-        q->sy = v[2] >= c->znear ? screen_y(c, v) : 0.0;
-        if (c->keyed && v[2] >= c->znear && isfinite(q->sx) && isfinite(q->sy))
-            *k = (pkey){key_ceil(q->sx, c->w), key_floor(q->sx, c->w), key_ceil(q->sy, c->h), key_floor(q->sy, c->h)};
-        else
-            *k = (pkey){SHRT_MIN, SHRT_MAX, SHRT_MIN, SHRT_MAX};
+    for (long g = begin; g < end;) { /* mesh by mesh */
+        while (g >= cam.first_vert[m + 1]) ++m;
+        const long mesh_end = cam.first_vert[m + 1] < end ? cam.first_vert[m + 1] : end;
+        const double *x = cam.meshes[m].pos + 3 * (g - cam.first_vert[m]);
+        pvert *q = &cam.pv[g];
+        pkey *k = &cam.key[g];
+        for (; g < mesh_end; ++g, x += 3, ++q, ++k) {
+            double v[3];
+            view_space(&cam, x, v);
+            const int seen = v[2] >= cam.znear;
+            q->z = v[2];
+            q->sx = seen ? screen_x(&cam, v) : 0.0;
+            q->sy = seen ? screen_y(&cam, v) : 0.0;
+            if (cam.keyed && seen && isfinite(q->sx) && isfinite(q->sy))
+                *k = (pkey){key_ceil(q->sx, cam.w), key_floor(q->sx, cam.w), key_ceil(q->sy, cam.h), key_floor(q->sy, cam.h)};
+            else
+                *k = (pkey){SHRT_MIN, SHRT_MAX, SHRT_MIN, SHRT_MAX};
+        }
     }
 }
 
@@ -182,11 +186,80 @@ static int pixel_box(const ctx_t *c, const double *sx, const double *sy, const i
     return 1;
 }
 
-/* Clip the triangle to forward >= znear, project, and emit up to 2 records; returns the count.
+/* A record's edge functions. */
+typedef struct {
+    double area, ax[3], ay[3], ex[3], ey[3], sg[3];
+    int bias[3];
+} edges;
+
+/* From the record's screen positions x, y only. */
+static void edge_setup(const rtri *r, edges *e)
+{
+    e->area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
+    for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
+        const int a = (k + 1) % 3, b = (k + 2) % 3;
+        const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
+        /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
+         * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
+         * products and get exactly opposite values, so no pixel centre falls between them */
+        const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
+        const int lo = fwd ? a : b, hi = fwd ? b : a;
+        e->ax[k] = r->x[lo];
+        e->ay[k] = r->y[lo];
+        e->ex[k] = r->x[hi] - r->x[lo];
+        e->ey[k] = r->y[hi] - r->y[lo];
+        e->sg[k] = fwd ? -1.0 : 1.0;
+        e->bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
+    }
+}
+
+/* 1 when pixel (x, y)'s centre is inside; l: the edge functions there, E_k. */
+static int pixel_inside(const edges *e, int x, int y, double l[3])
+{
+    const double px = x + 0.5, py = y + 0.5;
+    for (int k = 0; k < 3; ++k) {
+        l[k] = e->sg[k] * ((px - e->ax[k]) * e->ey[k] - (py - e->ay[k]) * e->ex[k]);
+        if (!(l[k] > 0 || (l[k] == 0 && e->bias[k]))) return 0;
+    }
+    return 1;
+}
+
+/* The perspective-correct weights before normalization at an inside pixel of edge functions l:
+ * w[k] = lambda_k / view depth_k; returns their sum, the pixel's 1 / view depth. */
+static double pixel_weights(const rtri *r, const edges *e, const double l[3], double w[3])
+{
+    for (int k = 0; k < 3; ++k) w[k] = l[k] / e->area * r->iw[k];
+    return w[0] + w[1] + w[2];
+}
+
+/* The source triangle's barycentrics at a pixel of weights w, iw = w0 + w1 + w2. */
+static void pixel_bary(const rtri *r, const double w[3], double iw, float bary[3])
+{
+    for (int j = 0; j < 3; ++j) bary[j] = (float)((w[0] * r->b[0][j] + w[1] * r->b[1][j] + w[2] * r->b[2][j]) / iw);
+}
+
+static int tile_of(const ctx_t *c, int x, int y) { return y / TILE * c->tiles_x + x / TILE; }
+
+/* tile: each tile the record's pixel box [x0, x1) x [y0, y1) meets, row by row. */
+#define FOR_TILES(c, r, tile) \
+    for (int ty_ = (r)->y0 / TILE; ty_ <= ((r)->y1 - 1) / TILE; ++ty_) \
+        for (int tx_ = (r)->x0 / TILE, tile = ty_ * (c)->tiles_x + tx_; tx_ <= ((r)->x1 - 1) / TILE; ++tx_, ++tile)
+
+/* setup_tri's output: records and fragments appended, and counted per tile in bin (a group's
+ * counters: records per tile, then fragments per tile). */
+typedef struct {
+    rtri *recs;
+    frag *frags;
+    long nrecs, nfrags, *bin;
+} setup_out;
+
+/* Clip the triangle to forward >= znear, project, and emit up to 2 records.  A record whose box
+ * holds one pixel centre (most triangles of a dense mesh are smaller than a pixel) is resolved
+ * here instead: into the fragment of that centre if it covers it, else into nothing.
  * pv: its corners' projections (project_job); a triangle wholly in front of the near plane
  * (the common case) uses them, the same values the clipping path computes.  box: the corners'
  * keys combined (setup_job); when all three are keys (cx >= 0), the pixel box of such a triangle. */
-static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pkey *box, rtri *out)
+static void setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pkey *box, setup_out *out)
 {
     const raster_mesh *rm = &c->meshes[m];
     const int *tv = rm->tri + 3 * (size_t)t;
@@ -223,7 +296,7 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pkey
                 }
             }
         }
-        if (n < 3) return 0;
+        if (n < 3) return;
         for (int k = 0; k < n; ++k) {
             sx[k] = screen_x(c, poly[k].v);
             sy[k] = screen_y(c, poly[k].v);
@@ -244,82 +317,53 @@ static int setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pkey
             continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
         if (area == 0.0) continue;
-        if (out) {
-            rtri *r = &out[emitted];
-            const int swap = area < 0; /* orient to positive area; y points down, so front faces have area < 0 */
-            const int order[3] = {id[0], swap ? id[2] : id[1], swap ? id[1] : id[2]};
-            for (int k = 0; k < 3; ++k) {
-                r->x[k] = sx[order[k]];
-                r->y[k] = sy[order[k]];
-                r->iw[k] = (float)(1.0 / z[order[k]]);
-                memcpy(r->b[k], b[order[k]], sizeof r->b[k]);
-            }
-            r->x0 = x0;
-            r->x1 = x1;
-            r->y0 = y0;
-            r->y1 = y1;
-            r->mesh = m;
-            r->tri = rm->tri_id ? rm->tri_id[t] : t;
-            r->back = !swap;
-            r->fan = (unsigned char)emitted;
+        rtri *r = &out->recs[out->nrecs];
+        const int swap = area < 0; /* orient to positive area; y points down, so front faces have area < 0 */
+        const int order[3] = {id[0], swap ? id[2] : id[1], swap ? id[1] : id[2]};
+        for (int k = 0; k < 3; ++k) {
+            r->x[k] = sx[order[k]];
+            r->y[k] = sy[order[k]];
         }
-        ++emitted;
+        const int one_pixel = x1 - x0 == 1 && y1 - y0 == 1;
+        edges e;
+        double l[3];
+        if (one_pixel) {
+            edge_setup(r, &e);
+            if (!pixel_inside(&e, x0, y0, l)) {
+                ++emitted;
+                continue;
+            }
+        }
+        for (int k = 0; k < 3; ++k) {
+            r->iw[k] = (float)(1.0 / z[order[k]]);
+            memcpy(r->b[k], b[order[k]], sizeof r->b[k]);
+        }
+        r->x0 = x0;
+        r->x1 = x1;
+        r->y0 = y0;
+        r->y1 = y1;
+        r->mesh = m;
+        r->tri = rm->tri_id ? rm->tri_id[t] : t;
+        r->back = !swap;
+        r->fan = (unsigned char)emitted++;
+        if (!one_pixel) {
+            FOR_TILES(c, r, tile) ++out->bin[tile];
+            ++out->nrecs;
+            continue;
+        }
+        frag *fr = &out->frags[out->nfrags++]; /* the record in its one pixel, as draw_record would draw it */
+        double w[3];
+        fr->iw = pixel_weights(r, &e, l, w);
+        pixel_bary(r, w, fr->iw, fr->bary);
+        fr->x = x0;
+        fr->y = y0;
+        fr->mesh = r->mesh;
+        fr->tri = r->tri;
+        fr->back = r->back;
+        fr->fan = r->fan;
+        ++out->bin[c->ntiles + tile_of(c, x0, y0)];
     }
-    return emitted;
 }
-
-/* A record's edge functions. */
-typedef struct {
-    double area, ax[3], ay[3], ex[3], ey[3], sg[3];
-    int bias[3];
-} edges;
-
-static void edge_setup(const rtri *r, edges *e)
-{
-    e->area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
-    for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
-        const int a = (k + 1) % 3, b = (k + 2) % 3;
-        const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
-        /* E_k = (p - A) x (B - A) from the edge's lexicographically smaller end A, times -1 if
-         * the triangle runs A -> B: the two triangles sharing an edge evaluate the same
-         * products and get exactly opposite values, so no pixel centre falls between them */
-        const int fwd = r->x[a] < r->x[b] || (r->x[a] == r->x[b] && r->y[a] < r->y[b]);
-        const int lo = fwd ? a : b, hi = fwd ? b : a;
-        e->ax[k] = r->x[lo];
-        e->ay[k] = r->y[lo];
-        e->ex[k] = r->x[hi] - r->x[lo];
-        e->ey[k] = r->y[hi] - r->y[lo];
-        e->sg[k] = fwd ? -1.0 : 1.0;
-        e->bias[k] = dy > 0 || (dy == 0 && dx < 0); /* ties: exactly one of two triangles sharing the edge */
-    }
-}
-
-/* 1 when pixel (x, y)'s centre is inside the record; then w[k] = lambda_k / view depth_k, the
- * perspective-correct weights before normalization. */
-static int pixel_weights(const rtri *r, const edges *e, int x, int y, double w[3])
-{
-    const double px = x + 0.5, py = y + 0.5;
-    double l[3];
-    for (int k = 0; k < 3; ++k) {
-        l[k] = e->sg[k] * ((px - e->ax[k]) * e->ey[k] - (py - e->ay[k]) * e->ex[k]);
-        if (!(l[k] > 0 || (l[k] == 0 && e->bias[k]))) return 0;
-    }
-    for (int k = 0; k < 3; ++k) w[k] = l[k] / e->area * r->iw[k];
-    return 1;
-}
-
-/* The source triangle's barycentrics at a pixel of weights w, iw = w0 + w1 + w2. */
-static void pixel_bary(const rtri *r, const double w[3], double iw, float bary[3])
-{
-    for (int j = 0; j < 3; ++j) bary[j] = (float)((w[0] * r->b[0][j] + w[1] * r->b[1][j] + w[2] * r->b[2][j]) / iw);
-}
-
-static int tile_of(const ctx_t *c, int x, int y) { return y / TILE * c->tiles_x + x / TILE; }
-
-/* tile: each tile the record's pixel box [x0, x1) x [y0, y1) meets, row by row. */
-#define FOR_TILES(c, r, tile) \
-    for (int ty_ = (r)->y0 / TILE; ty_ <= ((r)->y1 - 1) / TILE; ++ty_) \
-        for (int tx_ = (r)->x0 / TILE, tile = ty_ * (c)->tiles_x + tx_; tx_ <= ((r)->x1 - 1) / TILE; ++tx_, ++tile)
 
 /* A block of memory shrunk to `bytes` (kept as it is if realloc fails); NULL and freed when bytes is 0. */
 static void *shrink(void *block, size_t bytes)
@@ -332,46 +376,10 @@ static void *shrink(void *block, size_t bytes)
     return fit ? fit : block;
 }
 
-/* The records recs[0 .. n) of setup_tri whose box holds at most FRAG_BOX pixel centres become the
- * fragments of their covered centres, appended at frags[*nf]; the others are kept, moved to the
- * front.  bin: the group's counters (records per tile, then fragments per tile).  Returns the
- * number of records kept. */
-static int resolve_small(const ctx_t *c, rtri *recs, int n, frag *frags, long *nf, long *bin)
-{
-    int kept = 0;
-    for (int i = 0; i < n; ++i) {
-        const rtri *r = &recs[i];
-        if ((long)(r->x1 - r->x0) * (r->y1 - r->y0) > FRAG_BOX) {
-            FOR_TILES(c, r, t) ++bin[t];
-            if (kept != i) recs[kept] = *r;
-            ++kept;
-            continue;
-        }
-        edges e;
-        edge_setup(r, &e);
-        for (int y = r->y0; y < r->y1; ++y)
-            for (int x = r->x0; x < r->x1; ++x) {
-                double w[3];
-                if (!pixel_weights(r, &e, x, y, w)) continue;
-                frag *f = &frags[(*nf)++];
-                f->iw = w[0] + w[1] + w[2];
-                pixel_bary(r, w, f->iw, f->bary);
-                f->x = x;
-                f->y = y;
-                f->mesh = r->mesh;
-                f->tri = r->tri;
-                f->back = r->back;
-                f->fan = r->fan;
-                ++bin[c->ntiles + tile_of(c, x, y)];
-            }
-    }
-    return kept;
-}
-
 /* Set up the triangles of chunks [begin, end) (one group): the keys reject the triangles without
- * a pixel centre in their box, the others' records go to a block for 2 records a candidate and
- * their fragments (resolve_small) to a block for 2 FRAG_BOX a candidate, both then shrunk to their
- * number; the group's references and fragments per tile are counted for the binning. */
+ * a pixel centre in their box, the others' records and fragments (setup_tri) go to blocks for 2
+ * a candidate, then shrunk to their number; the group's references and fragments per tile are
+ * counted for the binning. */
 static void setup_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
@@ -381,7 +389,7 @@ static void setup_job(void *arg, int worker, long begin, long end)
     long *cand = c->cand + CHUNK * (size_t)worker, *bin = c->bin + (size_t)(begin / c->group) * 2 * (size_t)c->ntiles;
     for (long ch = begin; ch < end; ++ch) {
         const long g0 = ch * CHUNK, g1 = ntri < g0 + CHUNK ? ntri : g0 + CHUNK;
-        long n = 0, nc = 0, nf = 0;
+        long nc = 0;
         int m = 0;
         for (long g = g0; g < g1;) { /* mesh by mesh */
             while (g >= c->first_tri[m + 1]) ++m;
@@ -407,24 +415,23 @@ static void setup_job(void *arg, int worker, long begin, long end)
             const pvert *pv = c->pv + c->first_vert[m];
             for (int k = 0; k < 3; ++k) corner[3 * i + k] = pv[tv[k]];
         }
-        rtri *recs = nc ? malloc(sizeof(rtri) * 2 * (size_t)nc) : NULL; /* at most 2 records a triangle */
-        frag *frags = nc ? malloc(sizeof(frag) * 2 * FRAG_BOX * (size_t)nc) : NULL;
-        if (nc && (!recs || !frags)) {
-            free(recs);
-            free(frags);
+        /* at most 2 records a triangle, or their fragments */
+        setup_out out = {nc ? malloc(sizeof(rtri) * 2 * (size_t)nc) : NULL, nc ? malloc(sizeof(frag) * 2 * (size_t)nc) : NULL, 0, 0, bin};
+        if (nc && (!out.recs || !out.frags)) {
+            free(out.recs);
+            free(out.frags);
             c->chunk_count[ch] = -1; /* out of memory, seen by raster_draw */
             continue;
         }
         m = 0;
         for (long i = 0; i < nc; ++i) {
             while (cand[i] >= c->first_tri[m + 1]) ++m;
-            const int emitted = setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, &cand_box[i], recs + n);
-            n += resolve_small(c, recs + n, emitted, frags, &nf, bin);
+            setup_tri(c, m, (int)(cand[i] - c->first_tri[m]), corner + 3 * i, &cand_box[i], &out);
         }
-        c->chunk_recs[ch] = shrink(recs, sizeof(rtri) * (size_t)n);
-        c->chunk_count[ch] = n;
-        c->chunk_frags[ch] = shrink(frags, sizeof(frag) * (size_t)nf);
-        c->chunk_nfrags[ch] = nf;
+        c->chunk_recs[ch] = shrink(out.recs, sizeof(rtri) * (size_t)out.nrecs);
+        c->chunk_count[ch] = out.nrecs;
+        c->chunk_frags[ch] = shrink(out.frags, sizeof(frag) * (size_t)out.nfrags);
+        c->chunk_nfrags[ch] = out.nfrags;
     }
 }
 
@@ -500,11 +507,21 @@ static void draw_record(const ctx_t *c, const rtri *r, int x0, int y0, int x1, i
     y1 = r->y1 < y1 ? r->y1 : y1;
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
-            double w[3];
-            if (!pixel_weights(r, &e, x, y, w)) continue;
+            double l[3], w[3];
+            if (!pixel_inside(&e, x, y, l)) continue;
             const size_t p = (size_t)y * (size_t)c->w + (size_t)x;
-            const double iw = w[0] + w[1] + w[2];
+            const double iw = pixel_weights(r, &e, l, w);
             if (depth_test_store(c->fb, p, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
+        }
+}
+
+/* Background in [x0, x1) x [y0, y1). */
+static void clear(framebuf *fb, int x0, int y0, int x1, int y1)
+{
+    for (int y = y0; y < y1; ++y)
+        for (size_t p = (size_t)y * (size_t)fb->w + (size_t)x0; p < (size_t)y * (size_t)fb->w + (size_t)x1; ++p) {
+            fb->depth[p] = 0.0f;
+            fb->mesh[p] = fb->tri[p] = -1;
         }
 }
 
@@ -530,6 +547,7 @@ static void tile_job(void *arg, int worker, long begin, long end)
         sort_keys(c, key, order, n + nf);
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
+        clear(fb, tx0, ty0, tx1, ty1);
         for (long i = 0; i < n + nf; ++i) {
             const long item = order[i];
             if (item < n) {
@@ -557,11 +575,6 @@ static void *work(framebuf *fb, int i, size_t bytes)
 
 int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int nmeshes, int nthreads)
 {
-    const size_t npix = (size_t)fb->w * (size_t)fb->h;
-    for (size_t p = 0; p < npix; ++p) {
-        fb->depth[p] = 0.0f;
-        fb->mesh[p] = fb->tri[p] = -1;
-    }
     ctx_t c;
     memset(&c, 0, sizeof c);
     c.cam = cam;
@@ -592,7 +605,8 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.tiles_x = (fb->w + TILE - 1) / TILE;
     c.tiles_y = (fb->h + TILE - 1) / TILE;
     const int ntiles = c.ntiles = c.tiles_x * c.tiles_y;
-    c.group = 1 + (long)((double)nchunks * 2 * ntiles / (1 << 21)); /* at most ~2M bin counters */
+    /* about 16 groups a worker (the prefix sum reads ngroups * ntiles counters), at most ~2M counters */
+    c.group = 1 + nchunks / (16 * nw) + (long)((double)nchunks * 2 * ntiles / (1 << 21));
     c.ngroups = (nchunks + c.group - 1) / c.group;
     c.pv = work(fb, 0, sizeof(pvert) * (size_t)(c.first_vert[nmeshes] + 1));
     c.key = work(fb, 1, sizeof(pkey) * (size_t)(c.first_vert[nmeshes] + 1));
@@ -638,6 +652,7 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
+    if (st) clear(fb, 0, 0, fb->w, fb->h);
     free(c.first_tri);
     free(c.first_vert);
     for (long ch = 0; ch < c.nchunks; ++ch) {
