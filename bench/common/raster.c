@@ -120,21 +120,14 @@ static void view_space(const ctx_t *c, const double *x, double v[3])
 static double screen_x(const ctx_t *c, const double v[3]) { return 0.5 * c->w + c->focal * v[0] / v[2]; }
 static double screen_y(const ctx_t *c, const double v[3]) { return 0.5 * c->h - c->focal * v[1] / v[2]; }
 
-/* ceil(s - 0.5) clamped to [0, n] and floor(s - 0.5) clamped to [-1, n - 1] (s finite), by
- * truncation where it is exact (0 <= t < n). */
-static short key_ceil(double s, int n)
+/* *ceil_key = ceil(s - 0.5) clamped to [0, n] and *floor_key = floor(s - 0.5) clamped to [-1, n - 1]
+ * (s finite), from one truncation where it is exact (0 <= t < n). */
+static void key_pair(double s, int n, short *ceil_key, short *floor_key)
 {
     const double t = s - 0.5;
-    if (t <= 0.0) return 0;
-    if (t > n - 1) return (short)n;
-    const int k = (int)t;
-    return (short)(k + (t > k));
-}
-
-static short key_floor(double s, int n)
-{
-    const double t = s - 0.5;
-    return (short)(t < 0.0 ? -1 : t >= n ? n - 1 : (int)t);
+    const int k = t < 0.0 ? -1 : t >= n ? n - 1 : (int)t;
+    *floor_key = (short)k;
+    *ceil_key = (short)(t < 0.0 ? 0 : t >= n ? n : k + (t > k));
 }
 
 static void project_job(void *arg, int worker, long begin, long end)
@@ -156,9 +149,10 @@ static void project_job(void *arg, int worker, long begin, long end)
             q->z = v[2];
             q->sx = seen ? screen_x(&cam, v) : 0.0;
             q->sy = seen ? screen_y(&cam, v) : 0.0;
-            if (cam.keyed && seen && isfinite(q->sx) && isfinite(q->sy))
-                *k = (pkey){key_ceil(q->sx, cam.w), key_floor(q->sx, cam.w), key_ceil(q->sy, cam.h), key_floor(q->sy, cam.h)};
-            else
+            if (cam.keyed && seen && isfinite(q->sx) && isfinite(q->sy)) {
+                key_pair(q->sx, cam.w, &k->cx, &k->fx);
+                key_pair(q->sy, cam.h, &k->cy, &k->fy);
+            } else
                 *k = (pkey){SHRT_MIN, SHRT_MAX, SHRT_MIN, SHRT_MAX};
         }
     }
