@@ -218,6 +218,25 @@ static int pixel_inside(const edges *e, int x, int y, double l[3])
     return 1;
 }
 
+/* pixel_inside's answer without its values, and without data-dependent branches (most one-pixel
+ * records cover nothing, unpredictably).  With the record's directed edge (dx, dy) = B - A and its
+ * lexicographically smaller end L, pixel_inside's E_k is -((p - L) x (dx, dy)) up to the sign of a
+ * zero: the same products with negated operands. */
+static int pixel_covered(const rtri *r, int x, int y)
+{
+    const double px = x + 0.5, py = y + 0.5;
+    int inside = 1;
+    for (int k = 0; k < 3; ++k) {
+        const int a = (k + 1) % 3, b = (k + 2) % 3;
+        const double xa = r->x[a], ya = r->y[a], xb = r->x[b], yb = r->y[b];
+        const int fwd = (xa < xb) | ((xa == xb) & (ya < yb)), lo = b + fwd * (a - b); /* index arithmetic: no branch */
+        const double lx = r->x[lo], ly = r->y[lo], dx = xb - xa, dy = yb - ya;
+        const double minus_e = (px - lx) * dy - (py - ly) * dx;
+        inside &= (minus_e < 0) | ((minus_e == 0) & ((dy > 0) | ((dy == 0) & (dx < 0))));
+    }
+    return inside;
+}
+
 /* The perspective-correct weights before normalization at an inside pixel of edge functions l:
  * w[k] = lambda_k / view depth_k; returns their sum, the pixel's 1 / view depth. */
 static double pixel_weights(const rtri *r, const edges *e, const double l[3], double w[3])
@@ -322,11 +341,12 @@ static void setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pke
         edges e;
         double l[3];
         if (one_pixel) {
-            edge_setup(r, &e);
-            if (!pixel_inside(&e, x0, y0, l)) {
+            if (!pixel_covered(r, x0, y0)) {
                 ++emitted;
                 continue;
             }
+            edge_setup(r, &e);
+            pixel_inside(&e, x0, y0, l); /* inside: its edge functions */
         }
         for (int k = 0; k < 3; ++k) {
             r->iw[k] = (float)(1.0 / z[order[k]]);
