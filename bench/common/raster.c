@@ -86,7 +86,7 @@ typedef struct {
     int keyed;        /* the frame fits the keys' shorts */
     long maxlist, maxfrags; /* longest tile list, most fragments of a tile */
     size_t tile_buf_len; /* per worker */
-    void *tile_buf;   /* per worker: maxlist records (a tile's, in list order), then 2 (maxlist + maxfrags)
+    void *tile_buf;   /* per worker: a tile_z, maxlist records (a tile's, in list order), then 2 (maxlist + maxfrags)
                          keys and as many indices (sort_keys) */
     long nchunks, group, ngroups; /* setup: chunks of CHUNK global triangles, `group` chunks per call */
     rtri **chunk_recs; /* per chunk: its records, in triangle order */
@@ -498,20 +498,29 @@ static void sort_keys(const ctx_t *c, uint64_t *key, long *order, long n)
     if (from) memcpy(order, idx[1], sizeof(long) * (size_t)n);
 }
 
-/* The z-buffer keeps the first of equal depths (deterministic ties): pixel p gets the fragment
+/* A tile's depth, mesh and triangle, in the cache while its records and fragments are drawn, then
+ * copied to the frame buffer; back and bary go to the frame buffer directly. */
+typedef struct {
+    float depth[TILE * TILE];
+    int mesh[TILE * TILE], tri[TILE * TILE];
+    int x0, y0; /* the tile's first pixel */
+} tile_z;
+
+/* The z-buffer keeps the first of equal depths (deterministic ties): pixel (x, y) gets the fragment
  * when its 1 / depth iw is larger; bary is then written by the caller. */
-static int depth_test_store(framebuf *fb, size_t p, double iw, int mesh, int tri, unsigned char back)
+static int depth_test_store(tile_z *z, framebuf *fb, int x, int y, double iw, int mesh, int tri, unsigned char back)
 {
-    if (!(iw > fb->depth[p])) return 0;
-    fb->depth[p] = (float)iw;
-    fb->mesh[p] = mesh;
-    fb->tri[p] = tri;
-    fb->back[p] = back;
+    const int i = (y - z->y0) * TILE + (x - z->x0);
+    if (!(iw > z->depth[i])) return 0;
+    z->depth[i] = (float)iw;
+    z->mesh[i] = mesh;
+    z->tri[i] = tri;
+    fb->back[(size_t)y * (size_t)fb->w + (size_t)x] = back;
     return 1;
 }
 
 /* The record's pixels within [x0, x1) x [y0, y1). */
-static void draw_record(const ctx_t *c, const rtri *r, int x0, int y0, int x1, int y1)
+static void draw_record(const ctx_t *c, tile_z *z, const rtri *r, int x0, int y0, int x1, int y1)
 {
     edges e;
     edge_setup(r, &e);
@@ -525,26 +534,18 @@ static void draw_record(const ctx_t *c, const rtri *r, int x0, int y0, int x1, i
             if (!pixel_inside(&e, x, y, l)) continue;
             const size_t p = (size_t)y * (size_t)c->w + (size_t)x;
             const double iw = pixel_weights(r, &e, l, w);
-            if (depth_test_store(c->fb, p, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
+            if (depth_test_store(z, c->fb, x, y, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
         }
 }
 
-/* Background in [x0, x1) x [y0, y1). */
-static void clear(framebuf *fb, int x0, int y0, int x1, int y1)
-{
-    for (int y = y0; y < y1; ++y)
-        for (size_t p = (size_t)y * (size_t)fb->w + (size_t)x0; p < (size_t)y * (size_t)fb->w + (size_t)x1; ++p) {
-            fb->depth[p] = 0.0f;
-            fb->mesh[p] = fb->tri[p] = -1;
-        }
-}
 
 /* Rasterize one tile: its records and fragments in the order of the unreordered meshes' triangles. */
 static void tile_job(void *arg, int worker, long begin, long end)
 {
     ctx_t *c = arg;
     framebuf *fb = c->fb;
-    rtri *local = (rtri *)((char *)c->tile_buf + c->tile_buf_len * (size_t)worker);
+    tile_z *z = (tile_z *)((char *)c->tile_buf + c->tile_buf_len * (size_t)worker);
+    rtri *local = (rtri *)(z + 1);
     uint64_t *key = (uint64_t *)(local + c->maxlist);
     long *order = (long *)(key + 2 * (size_t)(c->maxlist + c->maxfrags));
     for (long tile = begin; tile < end; ++tile) {
@@ -561,16 +562,27 @@ static void tile_job(void *arg, int worker, long begin, long end)
         sort_keys(c, key, order, n + nf);
         const int tx0 = (int)(tile % c->tiles_x) * TILE, ty0 = (int)(tile / c->tiles_x) * TILE;
         const int tx1 = tx0 + TILE < c->w ? tx0 + TILE : c->w, ty1 = ty0 + TILE < c->h ? ty0 + TILE : c->h;
-        clear(fb, tx0, ty0, tx1, ty1);
+        for (int i = 0; i < TILE * TILE; ++i) {
+            z->depth[i] = 0.0f;
+            z->mesh[i] = z->tri[i] = -1;
+        }
+        z->x0 = tx0;
+        z->y0 = ty0;
         for (long i = 0; i < n + nf; ++i) {
             const long item = order[i];
             if (item < n) {
-                draw_record(c, &local[item], tx0, ty0, tx1, ty1);
+                draw_record(c, z, &local[item], tx0, ty0, tx1, ty1);
                 continue;
             }
             const frag *f = &fr[item - n];
-            const size_t p = (size_t)f->y * (size_t)c->w + (size_t)f->x;
-            if (depth_test_store(fb, p, f->iw, f->mesh, f->tri, f->back)) memcpy(fb->bary + 3 * p, f->bary, sizeof f->bary);
+            if (depth_test_store(z, fb, f->x, f->y, f->iw, f->mesh, f->tri, f->back))
+                memcpy(fb->bary + 3 * ((size_t)f->y * (size_t)c->w + (size_t)f->x), f->bary, sizeof f->bary);
+        }
+        for (int y = ty0; y < ty1; ++y) {
+            const size_t p = (size_t)y * (size_t)c->w + (size_t)tx0, len = (size_t)(tx1 - tx0);
+            memcpy(fb->depth + p, z->depth + (y - ty0) * TILE, sizeof(float) * len);
+            memcpy(fb->mesh + p, z->mesh + (y - ty0) * TILE, sizeof(int) * len);
+            memcpy(fb->tri + p, z->tri + (y - ty0) * TILE, sizeof(int) * len);
         }
     }
 }
@@ -661,12 +673,16 @@ int raster_draw(framebuf *fb, const camera *cam, const raster_mesh *meshes, int 
     c.tile_frags = work(fb, 5, sizeof(frag) * (size_t)(frags + 1));
     if (!c.tile_list || !c.tile_frags) goto done;
     par_for(nchunks, c.group, nw, bin_job, &c);
-    c.tile_buf_len = sizeof(rtri) * (size_t)c.maxlist + sizeof(uint64_t) * 4 * (size_t)(c.maxlist + c.maxfrags);
+    c.tile_buf_len = sizeof(tile_z) + sizeof(rtri) * (size_t)c.maxlist + sizeof(uint64_t) * 4 * (size_t)(c.maxlist + c.maxfrags);
     if (!(c.tile_buf = work(fb, 3, c.tile_buf_len * (size_t)nw + 1))) goto done;
     par_for(ntiles, 1, nw, tile_job, &c);
     st = 0;
 done:
-    if (st) clear(fb, 0, 0, fb->w, fb->h);
+    if (st) /* the background: no visibility */
+        for (size_t p = 0; p < (size_t)fb->w * (size_t)fb->h; ++p) {
+            fb->depth[p] = 0.0f;
+            fb->mesh[p] = fb->tri[p] = -1;
+        }
     free(c.first_tri);
     free(c.first_vert);
     for (long ch = 0; ch < c.nchunks; ++ch) {
