@@ -187,9 +187,14 @@ typedef struct {
 } edges;
 
 /* From the record's screen positions x, y only. */
+static double record_area(const rtri *r)
+{
+    return (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
+}
+
 static void edge_setup(const rtri *r, edges *e)
 {
-    e->area = (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
+    e->area = record_area(r);
     for (int k = 0; k < 3; ++k) { /* edge k is opposite vertex k: E_k = area * lambda_k */
         const int a = (k + 1) % 3, b = (k + 2) % 3;
         const double dx = r->x[b] - r->x[a], dy = r->y[b] - r->y[a];
@@ -218,30 +223,40 @@ static int pixel_inside(const edges *e, int x, int y, double l[3])
     return 1;
 }
 
-/* pixel_inside's answer without its values, and without data-dependent branches (most one-pixel
- * records cover nothing, unpredictably).  With the record's directed edge (dx, dy) = B - A and its
- * lexicographically smaller end L, pixel_inside's E_k is -((p - L) x (dx, dy)) up to the sign of a
- * zero: the same products with negated operands. */
-static int pixel_covered(const rtri *r, int x, int y)
+/* pixel_inside for one pixel, without data-dependent branches (most one-pixel records cover
+ * nothing, unpredictably) and without edge_setup.  With the record's directed edge (dx, dy) = B - A
+ * and its lexicographically smaller end L, pixel_inside's E_k is -((p - L) x (dx, dy)) up to the
+ * sign of a zero: the same products, with negated operands when L is B.  A pixel centre on an edge
+ * (some E_k zero) gets pixel_inside's own values. */
+static int pixel_covered(const rtri *r, int x, int y, double l[3])
 {
     const double px = x + 0.5, py = y + 0.5;
-    int inside = 1;
+    double minus_e[3];
+    int inside = 1, on_edge = 0;
     for (int k = 0; k < 3; ++k) {
         const int a = (k + 1) % 3, b = (k + 2) % 3;
         const double xa = r->x[a], ya = r->y[a], xb = r->x[b], yb = r->y[b];
         const int fwd = (xa < xb) | ((xa == xb) & (ya < yb)), lo = b + fwd * (a - b); /* index arithmetic: no branch */
         const double lx = r->x[lo], ly = r->y[lo], dx = xb - xa, dy = yb - ya;
-        const double minus_e = (px - lx) * dy - (py - ly) * dx;
-        inside &= (minus_e < 0) | ((minus_e == 0) & ((dy > 0) | ((dy == 0) & (dx < 0))));
+        minus_e[k] = (px - lx) * dy - (py - ly) * dx;
+        inside &= (minus_e[k] < 0) | ((minus_e[k] == 0) & ((dy > 0) | ((dy == 0) & (dx < 0))));
+        on_edge |= minus_e[k] == 0;
     }
-    return inside;
+    if (!inside) return 0;
+    if (on_edge) {
+        edges e;
+        edge_setup(r, &e);
+        return pixel_inside(&e, x, y, l);
+    }
+    for (int k = 0; k < 3; ++k) l[k] = -minus_e[k];
+    return 1;
 }
 
 /* The perspective-correct weights before normalization at an inside pixel of edge functions l:
  * w[k] = lambda_k / view depth_k; returns their sum, the pixel's 1 / view depth. */
-static double pixel_weights(const rtri *r, const edges *e, const double l[3], double w[3])
+static double pixel_weights(const rtri *r, double area, const double l[3], double w[3])
 {
-    for (int k = 0; k < 3; ++k) w[k] = l[k] / e->area * r->iw[k];
+    for (int k = 0; k < 3; ++k) w[k] = l[k] / area * r->iw[k];
     return w[0] + w[1] + w[2];
 }
 
@@ -338,15 +353,10 @@ static void setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pke
             r->y[k] = sy[order[k]];
         }
         const int one_pixel = x1 - x0 == 1 && y1 - y0 == 1;
-        edges e;
         double l[3];
-        if (one_pixel) {
-            if (!pixel_covered(r, x0, y0)) {
-                ++emitted;
-                continue;
-            }
-            edge_setup(r, &e);
-            pixel_inside(&e, x0, y0, l); /* inside: its edge functions */
+        if (one_pixel && !pixel_covered(r, x0, y0, l)) {
+            ++emitted;
+            continue;
         }
         for (int k = 0; k < 3; ++k) {
             r->iw[k] = (float)(1.0 / z[order[k]]);
@@ -367,7 +377,7 @@ static void setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pke
         }
         frag *fr = &out->frags[out->nfrags++]; /* the record in its one pixel, as draw_record would draw it */
         double w[3];
-        fr->iw = pixel_weights(r, &e, l, w);
+        fr->iw = pixel_weights(r, record_area(r), l, w);
         pixel_bary(r, w, fr->iw, fr->bary);
         fr->x = x0;
         fr->y = y0;
@@ -533,7 +543,7 @@ static void draw_record(const ctx_t *c, tile_z *z, const rtri *r, int x0, int y0
             double l[3], w[3];
             if (!pixel_inside(&e, x, y, l)) continue;
             const size_t p = (size_t)y * (size_t)c->w + (size_t)x;
-            const double iw = pixel_weights(r, &e, l, w);
+            const double iw = pixel_weights(r, e.area, l, w);
             if (depth_test_store(z, c->fb, x, y, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
         }
 }
