@@ -49,8 +49,8 @@ typedef struct {
     unsigned char back, fan; /* fan: which record of a clipped triangle */
 } rtri;
 
-/* The covered pixel centre of a record whose box holds one pixel centre, resolved in setup: what the depth test and the
- * buffer write need, the values tile_job would compute for it. */
+/* The covered pixel centre of a record whose box holds one pixel centre, resolved in setup: what
+ * the depth test and the buffer write need, the values tile_job would compute for it. */
 typedef struct {
     double iw;     /* interpolated 1 / view depth (the depth test compares it before rounding) */
     float bary[3];
@@ -186,12 +186,13 @@ typedef struct {
     int bias[3];
 } edges;
 
-/* From the record's screen positions x, y only. */
+/* Twice the record's signed screen area (positive: setup_tri orients records so). */
 static double record_area(const rtri *r)
 {
     return (r->x[1] - r->x[0]) * (r->y[2] - r->y[0]) - (r->x[2] - r->x[0]) * (r->y[1] - r->y[0]);
 }
 
+/* From the record's screen positions x, y only. */
 static void edge_setup(const rtri *r, edges *e)
 {
     e->area = record_area(r);
@@ -547,7 +548,6 @@ static void draw_record(const ctx_t *c, tile_z *z, const rtri *r, int x0, int y0
             if (depth_test_store(z, c->fb, x, y, iw, r->mesh, r->tri, r->back)) pixel_bary(r, w, iw, c->fb->bary + 3 * p);
         }
 }
-
 
 /* Rasterize one tile: its records and fragments in the order of the unreordered meshes' triangles. */
 static void tile_job(void *arg, int worker, long begin, long end)
