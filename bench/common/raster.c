@@ -68,10 +68,11 @@ typedef struct {
  * triangle wholly in front of the near plane has no pixel centre in its bounding box (setup_tri's
  * x0 >= x1 or y0 >= y1, which the clamps preserve) exactly when max fx < min cx or max fy < min cy:
  * setup_job rejects most triangles of a dense mesh (smaller than a pixel) from these 8 bytes per
- * corner instead of the 24 of pvert.  A vertex behind the near plane (or not finite) gets a key
- * that never rejects. */
+ * corner instead of the 24 of pvert.  fx and fy are stored negated, so a triangle's box (min cx,
+ * max fx, min cy, max fy) is the minimum of its corners' keys, lane by lane.  A vertex behind the
+ * near plane (or not finite) gets a key that never rejects (all lanes SHRT_MIN). */
 typedef struct {
-    short cx, fx, cy, fy;
+    short cx, nfx, cy, nfy; /* nfx = -fx, nfy = -fy */
 } pkey;
 
 typedef struct {
@@ -97,7 +98,7 @@ typedef struct {
                           then where they go) */
     pvert *corners;    /* per worker: 3 CHUNK triangle corners */
     long *cand;        /* per worker: CHUNK triangles the keys do not reject */
-    pkey *cand_box;    /* their keys' box: min cx, max fx, min cy, max fy of the corners */
+    pkey *cand_box;    /* their keys' box: the minimum of the corners' keys */
     long *tile_first, *frag_first;
     const rtri **tile_list;
     frag *tile_frags;  /* the fragments, tile by tile */
@@ -150,10 +151,13 @@ static void project_job(void *arg, int worker, long begin, long end)
             q->sx = seen ? screen_x(&cam, v) : 0.0;
             q->sy = seen ? screen_y(&cam, v) : 0.0;
             if (cam.keyed && seen && isfinite(q->sx) && isfinite(q->sy)) {
-                key_pair(q->sx, cam.w, &k->cx, &k->fx);
-                key_pair(q->sy, cam.h, &k->cy, &k->fy);
+                short fx, fy;
+                key_pair(q->sx, cam.w, &k->cx, &fx);
+                key_pair(q->sy, cam.h, &k->cy, &fy);
+                k->nfx = (short)-fx;
+                k->nfy = (short)-fy;
             } else
-                *k = (pkey){SHRT_MIN, SHRT_MAX, SHRT_MIN, SHRT_MAX};
+                *k = (pkey){SHRT_MIN, SHRT_MIN, SHRT_MIN, SHRT_MIN};
         }
     }
 }
@@ -339,9 +343,9 @@ static void setup_tri(const ctx_t *c, int m, int t, const pvert pv[3], const pke
         int x0, x1, y0, y1;
         if (unclipped && box->cx >= 0) { /* the same box (pkey) */
             x0 = box->cx;
-            x1 = box->fx + 1;
+            x1 = 1 - box->nfx;
             y0 = box->cy;
-            y1 = box->fy + 1;
+            y1 = 1 - box->nfy;
         } else if (!pixel_box(c, sx, sy, id, &x0, &x1, &y0, &y1))
             continue;
         const double area = (sx[id[1]] - sx[id[0]]) * (sy[id[2]] - sy[id[0]]) - (sx[id[2]] - sx[id[0]]) * (sy[id[1]] - sy[id[0]]);
@@ -424,13 +428,18 @@ static void setup_job(void *arg, int worker, long begin, long end)
             /* no data-dependent branches: many of these scattered loads stay in flight */
             for (; g < mesh_end; ++g, tv += 3) {
                 const pkey *a = &k[tv[0]], *b = &k[tv[1]], *d = &k[tv[2]];
-                const int maxfx = a->fx > b->fx ? a->fx : b->fx, mincx = a->cx < b->cx ? a->cx : b->cx;
-                const int maxfy = a->fy > b->fy ? a->fy : b->fy, mincy = a->cy < b->cy ? a->cy : b->cy;
-                const pkey box = {(short)(mincx < d->cx ? mincx : d->cx), (short)(maxfx > d->fx ? maxfx : d->fx),
-                                  (short)(mincy < d->cy ? mincy : d->cy), (short)(maxfy > d->fy ? maxfy : d->fy)};
+                pkey box = *a;
+                box.cx = b->cx < box.cx ? b->cx : box.cx;
+                box.nfx = b->nfx < box.nfx ? b->nfx : box.nfx;
+                box.cy = b->cy < box.cy ? b->cy : box.cy;
+                box.nfy = b->nfy < box.nfy ? b->nfy : box.nfy;
+                box.cx = d->cx < box.cx ? d->cx : box.cx;
+                box.nfx = d->nfx < box.nfx ? d->nfx : box.nfx;
+                box.cy = d->cy < box.cy ? d->cy : box.cy;
+                box.nfy = d->nfy < box.nfy ? d->nfy : box.nfy;
                 cand[nc] = g;
                 cand_box[nc] = box;
-                nc += (box.fx >= box.cx) & (box.fy >= box.cy);
+                nc += (box.cx + box.nfx <= 0) & (box.cy + box.nfy <= 0); /* max fx >= min cx, max fy >= min cy */
             }
         }
         m = 0;
