@@ -33,8 +33,8 @@ typedef struct {
     int *mesh, *tri;       /* mesh index and triangle per pixel (-1: background) */
     float *bary;           /* 3 per pixel: weights of the triangle's vertices */
     unsigned char *back;   /* 1: the triangle is seen from behind */
-    void *work[4];         /* raster_draw's buffers, kept from one draw to the next */
-    size_t work_len[4];    /* their sizes in bytes */
+    void *work[6];         /* raster_draw's buffers, kept from one draw to the next */
+    size_t work_len[6];    /* their sizes in bytes */
 } framebuf;
 
 int framebuf_init(framebuf *fb, int w, int h); /* 0 or -1 */
