@@ -182,44 +182,60 @@ static void hermite_row_weights(const shl__interp_point *s, double w[8], double 
     }
 }
 
-/* One row times weight w into four consecutive blocks. */
-static inline void row4(double w, const float *row, vd *a0, vd *a1, vd *a2, vd *a3)
+/* One row times weight w into nb (3 or 4, a constant where inlined) consecutive blocks. */
+__attribute__((always_inline)) static inline void row_blocks(double w, const float *row, int nb, vd *a0, vd *a1,
+                                                             vd *a2, vd *a3)
 {
     const vd wv = vd_set1(w);
     *a0 = vd_fma(wv, vd_load_float(row), *a0);
     *a1 = vd_fma(wv, vd_load_float(row + VL), *a1);
     *a2 = vd_fma(wv, vd_load_float(row + 2 * VL), *a2);
-    *a3 = vd_fma(wv, vd_load_float(row + 3 * VL), *a3);
+    if (nb == 4) *a3 = vd_fma(wv, vd_load_float(row + 3 * VL), *a3);
 }
 
 /* Corner j's four rows of a channel: value at vo, gradients at gxo + a nc. */
-static inline void corner4(const float *f, double w, const double wd[3], int nc, size_t vo, size_t gxo, vd *a0,
-                           vd *a1, vd *a2, vd *a3)
+__attribute__((always_inline)) static inline void corner_blocks(const float *f, double w, const double wd[3], int nc,
+                                                                size_t vo, size_t gxo, int nb, vd *a0, vd *a1,
+                                                                vd *a2, vd *a3)
 {
-    row4(w, f + vo, a0, a1, a2, a3);
-    row4(wd[0], f + gxo, a0, a1, a2, a3);
-    row4(wd[1], f + gxo + nc, a0, a1, a2, a3);
-    row4(wd[2], f + gxo + 2 * (size_t)nc, a0, a1, a2, a3);
+    row_blocks(w, f + vo, nb, a0, a1, a2, a3);
+    row_blocks(wd[0], f + gxo, nb, a0, a1, a2, a3);
+    row_blocks(wd[1], f + gxo + nc, nb, a0, a1, a2, a3);
+    row_blocks(wd[2], f + gxo + 2 * (size_t)nc, nb, a0, a1, a2, a3);
 }
 
-/* Channel c's 4 blocks from coefficient k: corners 0-3 into a0..a3, 4-7 into b0..b3. */
-static void hermite4(const float *const f[8], const double w[8], double wd[8][3], int nc, int c, int k,
-                     double *out)
+/* Channel c's nb (3 or 4) blocks from coefficient k: corners 0-3 into a0..a3, 4-7 into b0..b3.
+ * Each lane's sum is the same whatever nb. */
+__attribute__((always_inline)) static inline void hermite_blocks(const float *const f[8], const double w[8],
+                                                                 double wd[8][3], int nc, int c, int k, int nb,
+                                                                 double *out)
 {
     const size_t vo = (size_t)c * nc + k, gxo = 3 * (size_t)nc + 3 * (size_t)c * nc + k;
     vd a0 = vd_set1(0.0), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
     for (int j = 0; j < 4; ++j) {
-        corner4(f[j], w[j], wd[j], nc, vo, gxo, &a0, &a1, &a2, &a3);
-        corner4(f[j + 4], w[j + 4], wd[j + 4], nc, vo, gxo, &b0, &b1, &b2, &b3);
+        corner_blocks(f[j], w[j], wd[j], nc, vo, gxo, nb, &a0, &a1, &a2, &a3);
+        corner_blocks(f[j + 4], w[j + 4], wd[j + 4], nc, vo, gxo, nb, &b0, &b1, &b2, &b3);
     }
     vd_store(out + vo, vd_add(a0, b0));
     vd_store(out + vo + VL, vd_add(a1, b1));
     vd_store(out + vo + 2 * VL, vd_add(a2, b2));
-    vd_store(out + vo + 3 * VL, vd_add(a3, b3));
+    if (nb == 4) vd_store(out + vo + 3 * VL, vd_add(a3, b3));
 }
 
-/* Per channel: groups of 4 blocks from k = 0, 4 VL, ..., the last one ending at
- * nc (overlapping the previous one, rewriting the same values). */
+static void hermite4(const float *const f[8], const double w[8], double wd[8][3], int nc, int c, int k, double *out)
+{
+    hermite_blocks(f, w, wd, nc, c, k, 4, out);
+}
+
+static void hermite3(const float *const f[8], const double w[8], double wd[8][3], int nc, int c, int k, double *out)
+{
+    hermite_blocks(f, w, wd, nc, c, k, 3, out);
+}
+
+/* Per channel: groups of 4 blocks from k = 0, 4 VL, ...; the rest (nc - 4 VL groups, if any) as
+ * one more group ending at nc, of 3 blocks where they cover it (lmax 4 on avx2: 25 = 16 + 9,
+ * 7 blocks per channel, not 8), else of 4, overlapping the previous one and rewriting the same
+ * values. */
 static void hermite(const float *const f[8], const shl__interp_point *s, int nc, shl__interp_ahead *ahead, double *out)
 {
     const int width = 4 * VL;
@@ -229,12 +245,19 @@ static void hermite(const float *const f[8], const shl__interp_point *s, int nc,
     }
     double w[8], wd[8][3];
     hermite_row_weights(s, w, wd);
-    shl__interp_ahead_plan(ahead, 3 * (size_t)((nc + width - 1) / width));
-    for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < nc; k += width) {
+    const int groups = nc / width, rest = nc - groups * width;
+    shl__interp_ahead_plan(ahead, 3 * (size_t)(groups + (rest > 0)));
+    for (int c = 0; c < 3; ++c) {
+        for (int g = 0; g < groups; ++g) {
             shl__interp_ahead_step(ahead);
-            hermite4(f, w, wd, nc, c, k + width <= nc ? k : nc - width, out);
+            hermite4(f, w, wd, nc, c, g * width, out);
         }
+        if (rest > 0) shl__interp_ahead_step(ahead);
+        if (rest > 0 && rest <= 3 * VL)
+            hermite3(f, w, wd, nc, c, nc - 3 * VL, out);
+        else if (rest > 0)
+            hermite4(f, w, wd, nc, c, nc - width, out);
+    }
 }
 
 void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,

@@ -31,10 +31,11 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
 static void locate(const shl_grid *g, const double p[3], point_setup *s)
 {
     int cell[3];
-    for (int a = 0; a < 3; ++a) {
-        const double t = (fmin(fmax(p[a], g->lo[a]), g->hi[a]) - g->lo[a]) / g->h[a];
+    for (int a = 0; a < 3; ++a) { /* p is finite (grid_interp checked): comparisons, not the fmin/fmax calls */
+        const double x = p[a] < g->lo[a] ? g->lo[a] : p[a] > g->hi[a] ? g->hi[a] : p[a];
+        const double t = (x - g->lo[a]) / g->h[a];
         cell[a] = t < g->res[a] - 1 ? (int)t : g->res[a] - 2;
-        s->u[a] = fmin(t - cell[a], 1.0);
+        s->u[a] = t - cell[a] < 1.0 ? t - cell[a] : 1.0;
     }
     for (int j = 0; j < 8; ++j) {
         const size_t ix = (size_t)cell[0] + (j & 1), iy = (size_t)cell[1] + ((j >> 1) & 1), iz = (size_t)cell[2] + (j >> 2);

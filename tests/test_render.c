@@ -294,6 +294,58 @@ static void grid_mesh(const camera *cam, double depth, int diag, double *pos, in
         }
 }
 
+
+/* Morton key of x in [lo, hi]: 10 bits per axis, bit b of axis a at bit 3 b + a (a bit loop,
+ * independent of mesh.c's shifts and masks). */
+static uint64_t morton_key(const double x[3], const double lo[3], const double hi[3])
+{
+    uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+        const double u = hi[a] > lo[a] ? (x[a] - lo[a]) / (hi[a] - lo[a]) * 1024.0 : 0.0;
+        const uint64_t q = u < 0.0 ? 0 : u >= 1023.0 ? 1023 : (uint64_t)u;
+        for (int b = 0; b < 10; ++b) key |= ((q >> b) & 1) << (3 * b + a);
+    }
+    return key;
+}
+
+/* mesh_vertex_order (prt_init's first stage) on the tiny scene's receivers: every triangle
+ * keeps its place and its corners' positions, normals and materials bit for bit, the vertices
+ * are a permutation of the old ones (each used once as the image of one old vertex), and
+ * their Morton keys do not decrease. */
+SHL_TEST(render_vertex_order_permutes_vertices)
+{
+    scene a, b;
+    char err[256];
+    CHECK(!scene_parse(tiny_scene, "tiny", ".", &a, err, sizeof err));
+    CHECK(!scene_parse(tiny_scene, "tiny", ".", &b, err, sizeof err));
+    CHECK(!mesh_vertex_order(&b.geom));
+    const mesh *m0 = &a.geom, *m1 = &b.geom;
+    CHECK(m0->nv == m1->nv && m0->nt == m1->nt);
+    int *old_of = malloc(sizeof(int) * (size_t)m1->nv);
+    CHECK(old_of != NULL);
+    for (int v = 0; v < m1->nv; ++v) old_of[v] = -1;
+    long mismatched = 0, conflicts = 0, moved = 0, decreasing = 0;
+    for (size_t k = 0; k < 3 * (size_t)m0->nt; ++k) {
+        const int v0 = m0->tri[k], v1 = m1->tri[k];
+        mismatched += memcmp(m0->pos + 3 * (size_t)v0, m1->pos + 3 * (size_t)v1, sizeof(double) * 3) != 0 ||
+                      memcmp(m0->nrm + 3 * (size_t)v0, m1->nrm + 3 * (size_t)v1, sizeof(double) * 3) != 0 ||
+                      m0->mat[v0] != m1->mat[v1];
+        conflicts += old_of[v1] >= 0 && old_of[v1] != v0;
+        old_of[v1] = v0;
+    }
+    double lo[3], hi[3];
+    mesh_bounds(m0, lo, hi);
+    for (int v = 0; v < m1->nv; ++v) {
+        moved += old_of[v] != v;
+        decreasing += v > 0 && morton_key(m1->pos + 3 * (size_t)v, lo, hi) < morton_key(m1->pos + 3 * (size_t)(v - 1), lo, hi);
+    }
+    CHECK(mismatched == 0 && conflicts == 0 && decreasing == 0 && moved > 0);
+    harness_note("%d vertices, %ld moved; %d triangles: corners identical; Morton keys non-decreasing", m1->nv, moved,
+                 m1->nt);
+    free(old_of);
+    scene_free(&a);
+    scene_free(&b);
+}
 /* The raster's pixel-centre rule on a watertight mesh: the grid above covers exactly the
  * 48 x 48 pixel centres inside it, each once - a triangle rejected by raster.c's per-vertex keys
  * while holding a centre (on a vertex or an edge) would leave a hole.  Then the locality

@@ -378,8 +378,14 @@ static void eval_block(void *arg, int worker, long begin, long end)
         }
         break;
     }
-    if (L->m.kind != LM_ANALYTIC_F)
-        for (size_t k = 0; k < 3 * (size_t)nc * (size_t)nb; ++k) coef[k] = (float)out[k];
+    if (L->m.kind != LM_ANALYTIC_F) {
+        /* rounded to float in runs of 8 (gcc -O2 vectorizes the fixed-count inner loop: the
+         * scalar conversion loop took ~10% of the grid path's interpolation time) */
+        const size_t total = 3 * (size_t)nc * (size_t)nb, runs = total / 8 * 8;
+        for (size_t k = 0; k < runs; k += 8)
+            for (size_t r = 0; r < 8; ++r) coef[k + r] = (float)out[k + r];
+        for (size_t k = runs; k < total; ++k) coef[k] = (float)out[k];
+    }
     const double t1 = bench_now();
     j->consume(j->arg, worker, begin, end, coef);
     j->t_eval[worker] += t1 - t0;

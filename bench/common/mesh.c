@@ -301,6 +301,17 @@ static uint64_t spread3(uint64_t q)
     return (q | q << 2) & 0x09249249u;
 }
 
+/* Morton code of point c: 10 bits per axis over the box [lo, hi]. */
+static uint64_t morton_code(const double c[3], const double lo[3], const double hi[3])
+{
+    uint64_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+        const double u = hi[a] > lo[a] ? (c[a] - lo[a]) / (hi[a] - lo[a]) * 1024.0 : 0.0;
+        code |= spread3(u < 0.0 ? 0 : u >= 1023.0 ? 1023 : (uint64_t)u) << a;
+    }
+    return code;
+}
+
 int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, int *nv)
 {
     double lo[3], hi[3];
@@ -312,14 +323,10 @@ int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, in
     *tri_id = malloc(sizeof(int) * ((size_t)m->nt + 1));
     if (!order || !id || !*pos || !*tri || !*tri_id) goto fail;
     for (int t = 0; t < m->nt; ++t) {
-        uint64_t code = 0;
-        for (int a = 0; a < 3; ++a) {
-            const int *v = m->tri + 3 * (size_t)t;
-            const double c = (m->pos[3 * v[0] + a] + m->pos[3 * v[1] + a] + m->pos[3 * v[2] + a]) / 3.0;
-            const double u = hi[a] > lo[a] ? (c - lo[a]) / (hi[a] - lo[a]) * 1024.0 : 0.0;
-            code |= spread3(u < 0.0 ? 0 : u >= 1023.0 ? 1023 : (uint64_t)u) << a;
-        }
-        order[t] = (kv){code, t};
+        const int *v = m->tri + 3 * (size_t)t;
+        double c[3];
+        for (int a = 0; a < 3; ++a) c[a] = (m->pos[3 * v[0] + a] + m->pos[3 * v[1] + a] + m->pos[3 * v[2] + a]) / 3.0;
+        order[t] = (kv){morton_code(c, lo, hi), t};
     }
     if (radix_sort(order, (size_t)m->nt)) goto fail;
     for (int v = 0; v < m->nv; ++v) id[v] = -1;
@@ -348,6 +355,44 @@ fail:
     *pos = NULL;
     *tri = *tri_id = NULL;
     return -1;
+}
+
+int mesh_vertex_order(mesh *m)
+{
+    double lo[3], hi[3];
+    mesh_bounds(m, lo, hi);
+    kv *order = malloc(sizeof *order * ((size_t)m->nv + 1));
+    int *id = malloc(sizeof(int) * ((size_t)m->nv + 1));
+    double *pos = malloc(sizeof(double) * 3 * ((size_t)m->nv + 1)), *nrm = malloc(sizeof(double) * 3 * ((size_t)m->nv + 1));
+    int *mat = m->mat ? malloc(sizeof(int) * ((size_t)m->nv + 1)) : NULL;
+    int st = -1;
+    if (!order || !id || !pos || !nrm || (m->mat && !mat)) goto done;
+    for (int v = 0; v < m->nv; ++v) order[v] = (kv){morton_code(m->pos + 3 * (size_t)v, lo, hi), v};
+    if (radix_sort(order, (size_t)m->nv)) goto done;
+    for (int i = 0; i < m->nv; ++i) {
+        const int v = (int)order[i].ref;
+        id[v] = i;
+        memcpy(pos + 3 * (size_t)i, m->pos + 3 * (size_t)v, sizeof(double) * 3);
+        memcpy(nrm + 3 * (size_t)i, m->nrm + 3 * (size_t)v, sizeof(double) * 3);
+        if (mat) mat[i] = m->mat[v];
+    }
+    for (size_t k = 0; k < 3 * (size_t)m->nt; ++k) m->tri[k] = id[m->tri[k]];
+    double *old_pos = m->pos, *old_nrm = m->nrm; /* freed below */
+    int *old_mat = m->mat;
+    m->pos = pos;
+    m->nrm = nrm;
+    m->mat = mat;
+    pos = old_pos;
+    nrm = old_nrm;
+    mat = old_mat;
+    st = 0;
+done:
+    free(order);
+    free(id);
+    free(pos);
+    free(nrm);
+    free(mat);
+    return st;
 }
 
 int mesh_subdivide_to(mesh *m, long target)

@@ -41,6 +41,11 @@ int mesh_subdivide_to(mesh *m, long target);
  * index order), vertices renumbered by first use.  Allocates *pos (3 *nv doubles), *tri (3 nt)
  * and *tri_id (nt: each triangle's index in m, corners in m's order); 0 or -1. */
 int mesh_locality_order(const mesh *m, double **pos, int **tri, int **tri_id, int *nv);
+/* Vertices renumbered in place in the Morton order of their positions (10 bits per axis over the
+ * bounding box; ties in index order): pos, nrm and mat permuted, triangle corners remapped,
+ * triangle order kept.  Per-vertex work in index order then walks space coherently.  0 or -1
+ * (m unchanged). */
+int mesh_vertex_order(mesh *m);
 /* dir/name as the oracle reads it (tools/oracle_images.py): positions, normals (3 nv doubles
  * each), the per-triangle albedo alb (3 nt doubles), triangles (3 nt ints); 0 or -1. */
 int mesh_write_oracle(const mesh *m, const double *alb, const char *dir, const char *name);

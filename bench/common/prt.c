@@ -87,7 +87,10 @@ int prt_init(prt *p, scene *s, int nthreads, const char *cache_dir, FILE *report
     p->vrad = malloc(sizeof(float) * 3 * (size_t)g->nv);
     p->mask = malloc((size_t)s->width * (size_t)s->height);
     if (!p->vrad || !p->mask || framebuf_init(&p->fb, s->width, s->height) || build_emitters(p)) goto fail;
-    double t0;
+    double t0 = bench_now();
+    if (mesh_vertex_order(&s->geom)) goto fail;
+    stage(p, "vertex order", bench_now() - t0, "%d vertices by Morton code of the position (grid cells, T and radiance in order)",
+          g->nv);
     if (s->effects & (FX_SHADOWS | FX_HVL)) {
         t0 = bench_now();
         if (!(p->bvh = bvh_build(g))) goto fail;

@@ -55,7 +55,9 @@ typedef struct {
     double resolve;  /* per-vertex radiance through the visibility buffer */
 } prt_times;
 
-/* Run the precomputation stages.  cache_dir: shadowed-transfer cache (NULL: none).  0 or -1. */
+/* Run the precomputation stages.  The first renumbers s->geom's vertices (mesh_vertex_order):
+ * per-vertex data of s must be taken after prt_init.  cache_dir: shadowed-transfer cache
+ * (NULL: none).  0 or -1. */
 int prt_init(prt *p, scene *s, int nthreads, const char *cache_dir, FILE *report);
 void prt_free(prt *p);
 /* Render with method m into img (3 w h floats).  subset (nsub vertices) limits
