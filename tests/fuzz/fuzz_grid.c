@@ -59,11 +59,12 @@ typedef struct {
 static glight GL[MAXL];
 static int ngl;
 
-static long double grad_bound(const double x[3], int lmax)
+static long double grad_bound_weighted(const double x[3], int lmax, int unit)
 {
     long double b = 0.0L;
     for (int i = 0; i < ngl; ++i) {
         const glight *li = &GL[i];
+        const long double w = unit ? 1.0L : li->rgbmax;
         if (li->sphere) {
             long double d2 = 0.0L;
             for (int k = 0; k < 3; ++k) d2 += ((long double)li->c[k] - x[k]) * ((long double)li->c[k] - x[k]);
@@ -71,15 +72,16 @@ static long double grad_bound(const double x[3], int lmax)
             if (d <= r * (1.0L - 1e-12L)) continue;         /* inside: gradient 0 */
             if (d < r * (1.0L + 1e-12L)) return INFINITY;  /* at the surface: unbounded */
             const long double s = r / d, c = sqrtl((d - r) * (d + r)) / d;
-            b += li->rgbmax * fz_kl(lmax) * 2.0L * M_PI * s * (1.0L + s / c) / d;
+            b += w * fz_kl(lmax) * 2.0L * M_PI * s * (1.0L + s / c) / d;
         } else {
             fz_geom G;
             if (!(li->P.structured && li->P.exact) || !fz_poly_geom(&li->P, x, &G)) return INFINITY;
-            b += li->rgbmax * fz_kl(lmax) * G.gsum;
+            b += w * fz_kl(lmax) * G.gsum;
         }
     }
     return b;
 }
+static long double grad_bound(const double x[3], int lmax) { return grad_bound_weighted(x, lmax, 0); }
 
 static int node_count(const int res[3]) { return res[0] * res[1] * res[2]; }
 
@@ -395,7 +397,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
              * can lie outside a tiny sphere whose centre is the node (gradient beyond float range) */
             const double at[3] = {batch ? (double)(float)pos[0] : pos[0], batch ? (double)(float)pos[1] : pos[1],
                                   batch ? (double)(float)pos[2] : pos[2]};
-            const long double gb = grad_bound(at, lmax);
+            /* each light's gradient is formed before its colour weighs it: beyond the storage's
+             * range it is +-inf there, and a zero colour channel makes 0 x inf = NaN (README,
+             * Known issues), so every light's unweighted bound must be in range too (a sphere of
+             * zero radiance 1e-265 from a float node: fuzz_grid-zero-radiance-sphere-float-overflow) */
+            const long double gb = fmaxl(grad_bound(at, lmax), grad_bound_weighted(at, lmax, 1));
             if (gb < (storage == SHL_GRID_DOUBLE ? DBL_MAX / 1e10 : FLT_MAX / 1e4))
                 FUZZ_CHECK(all_finite_d(nd + nv, node_len - nv), "non-finite node gradient (node %d, bound %.3Lg)", n, gb);
         }
