@@ -41,6 +41,120 @@
 #undef GW
 #endif
 
+#if ZW >= 4
+#define ZQ 4 /* doubles per vector in zh_lobe and grad_sh; NQ vectors hold the 4 outputs */
+#else
+#define ZQ 2
+#endif
+enum { NQ = 4 / ZQ };
+typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
+
+/* A lone lobe d (2 lmax + 1 = 1 mod ZW: lmax 8 on AVX2 is 16 + 1 lobes) with its edges side by
+ * side instead, LW per vector (groups of LW in edge order, spare lanes repeating the group's last
+ * edge): one chain of vector operations where gv_block would run G copies of the lobe, one per
+ * edge.  Lane k does edge e0 + k's arithmetic of gv_edges, operation for operation (gv_dot's
+ * u . p per lane is these products and sums), and the sums over edges (Eq. 14; Wu Eq. 11, 29)
+ * add each edge's terms (c_e B_l, mu_e I_l as the 4 doubles of zq) in edge order from 0 + the
+ * first, as gv_accumulate: gv_block's bits. */
+#if ZW >= 4
+#define LW 4
+#else
+#define LW 2
+#endif
+#define lv ZV_CAT(dv, LW)
+#define lv_set1 ZV_CAT(lv, _set1)
+#define lv_load ZV_CAT(lv, _load)
+
+static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band_consts *bc, double *zh,
+                    double *zh_grad, double *zh4, double gscale, int area)
+{
+    enum { NF = 24 }; /* per-edge inputs: w_e, lambda_e, mu_e, w_f, dw_e, gvec_e, 4 of gamma, I_0, f' */
+    const int n = g->n, ndir = 2 * lmax + 1;
+    const lv ux = lv_set1(shl__zh_dir[d][0]), uy = lv_set1(shl__zh_dir[d][1]), uz = lv_set1(shl__zh_dir[d][2]);
+    zq sum[SHL_LMAX_MAX + 1][NQ]; /* per band: sum_e c_e B_l (Eq. 14), sum_e mu_e I_l (Wu Eq. 11, 29) */
+    for (int l = 0; l <= lmax; ++l)
+        for (int q = 0; q < NQ; ++q) sum[l][q] = (zq){0};
+    for (int e0 = 0; e0 < n; e0 += LW) {
+        const int cnt = n - e0 < LW ? n - e0 : LW;
+        double t[NF][LW];
+        for (int k = 0; k < LW; ++k) {
+            const int e = e0 + (k < cnt ? k : cnt - 1), f = (e + 1 == n) ? 0 : e + 1;
+            for (int c = 0; c < 3; ++c) {
+                t[c][k] = g->w[e][c], t[3 + c][k] = g->lam[e][c], t[6 + c][k] = g->mu[e][c];
+                t[9 + c][k] = g->w[f][c], t[12 + c][k] = g->dw[e][c], t[15 + c][k] = g->gvec[e][c];
+            }
+            t[18][k] = g->gamma[e], t[19][k] = g->sin_gamma[e], t[20][k] = g->cos_gamma[e];
+            t[21][k] = g->omc_gamma[e], t[22][k] = g->f_integral[e], t[23][k] = g->fprime1[e];
+        }
+        lv in[NF];
+        for (int i = 0; i < NF; ++i) in[i] = lv_load(t[i]);
+        const lv gamma = in[18], i0 = in[22], fp1 = in[23], mx = in[6], my = in[7], mz = in[8];
+        /* Eq. 20 (gv_edges) */
+        const lv a = ux * in[0] + uy * in[1] + uz * in[2], b = ux * in[3] + uy * in[4] + uz * in[5];
+        const lv c = ux * mx + uy * my + uz * mz, af = ux * in[9] + uy * in[10] + uz * in[11];
+        const lv da = ux * in[12] + uy * in[13] + uz * in[14], v = ux * in[15] + uy * in[16] + uz * in[17];
+        const lv c2 = c * c, s = a * in[19] - b * in[20], b1 = a * in[19] + b * in[21]; /* B_1, Eq. 27 */
+        lv p_lm1 = a, p_lm2 = lv_set1(1.0), dp_lm1 = da, dp_lm2 = lv_set1(0.0);
+        lv b_lm1 = b1, b_lm2 = gamma, d_lm1 = gamma, d_lm2 = lv_set1(0.0);
+        lv i_lm1 = (v * gamma - (fp1 * da - i0 * a)) * lv_set1(0.5), j_lm1 = i0, j_lm2 = lv_set1(0.0); /* I_1, J_1, J_0 */
+        lv tb = c * gamma, ti = i0; /* band l's c_e B_l and I_l */
+        for (int l = 0; l <= lmax; ++l) {
+            if (l >= 2) {
+                const lv pa = lv_set1(bc->leg_a[l]), pb = lv_set1(bc->leg_b[l]), tlm1 = lv_set1(bc->twol_m1[l]);
+                const lv pl = pa * a * p_lm1 - pb * p_lm2;                    /* Eq. 11 */
+                const lv dl = tlm1 * b_lm1 + d_lm2;                           /* Eq. 32 */
+                const lv dpl = pa * (af * dp_lm1 + da * p_lm1) - pb * dp_lm2; /* dP_l */
+                ti = (v * dl - j_lm1 - (fp1 * dpl - i0 * pl)) * lv_set1(bc->inv_l[l + 1]);
+                const lv jl = tlm1 * i_lm1 + j_lm2;
+                j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = ti;
+                if (l < lmax) { /* Eq. 30-31 */
+                    const lv bl = lv_set1(bc->b_alpha[l]) * (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1) +
+                                  lv_set1(bc->b_beta[l]) * b_lm2;
+                    b_lm2 = b_lm1, b_lm1 = bl;
+                    tb = c * bl;
+                }
+                p_lm2 = p_lm1, p_lm1 = pl;
+                dp_lm2 = dp_lm1, dp_lm1 = dpl;
+                d_lm2 = d_lm1, d_lm1 = dl;
+            } else if (l == 1)
+                tb = c * b1, ti = i_lm1;
+            const lv tx = mx * ti, ty = my * ti, tz = mz * ti;
+            for (int k = 0; k < cnt; ++k) { /* edges in order */
+                const double q[4] = {tb[k], tx[k], ty[k], tz[k]};
+                for (int h = 0; h < NQ; ++h) {
+                    zq x;
+                    memcpy(&x, q + h * ZQ, sizeof x);
+                    sum[l][h] += x;
+                }
+            }
+        }
+    }
+    double surf[SHL_LMAX_MAX + 1];
+    surf[0] = g->solid_angle; /* S_0 */
+    if (lmax >= 1) surf[1] = sum[0][0][0] * 0.5; /* S_1, Eq. 25 */
+    for (int l = 2; l <= lmax; ++l) surf[l] = bc->s_b[l] * sum[l - 1][0][0] + bc->s_s[l] * surf[l - 2]; /* Eq. 29 */
+    for (int l = 0; l <= lmax; ++l) { /* Eq. 13 */
+        const double kl = bc->norm[l], kg = zh4 ? bc->norm[l] * gscale : kl;
+        double o[4];
+        for (int h = 0; h < NQ; ++h) {
+            const zq x = sum[l][h] * kg;
+            memcpy(o + h * ZQ, &x, sizeof x);
+        }
+        o[0] = kl * surf[l];
+        if (zh4) {
+            memcpy(zh4 + 4 * ((ptrdiff_t)l * ndir + d), o, sizeof o);
+            continue;
+        }
+        const ptrdiff_t at = (ptrdiff_t)d * SHL__ZH_STRIDE + l;
+        if (!area) zh[at] = o[0];
+        for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = o[1 + ax];
+    }
+}
+#undef lv_load
+#undef lv_set1
+#undef lv
+#undef LW
+
 __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom *g, int lmax, double *zh,
                                                            double *zh_grad, double *zh4, double gscale)
 {
@@ -48,14 +162,14 @@ __attribute__((always_inline)) static inline void zh_lanes(const shl__poly_geom 
     const int area = g->sliver && lmax <= SHL__AREA_LMAX; /* near-plane sliver: planar Gauss rule (polygon.c) */
     const shl__zh_band_consts *bc = shl__zh_bands(); /* the per-band constants, tabulated once */
     const int full = ndir - ndir % ZW, rest = ndir - full;
+    if (rest == 1) zh_lobe(g, lmax, full, bc, zh, zh_grad, zh4, gscale, area);
 #if ZW > 2
-    if (rest > 0 && rest <= 2) GV_BLOCK(2)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+    else if (rest > 0 && rest <= 2) GV_BLOCK(2)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
 #if ZW > 4
     else if (rest > 0 && rest <= 4) GV_BLOCK(4)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
 #endif
-    else
 #endif
-    if (rest > 0) GV_BLOCK(ZW)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
+    else if (rest > 0) GV_BLOCK(ZW)(g, lmax, full, rest, bc, zh, zh_grad, zh4, gscale, area);
     for (int d0 = 0; d0 < full; d0 += ZW) GV_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh, zh_grad, zh4, gscale, area);
     if (area && zh4) { /* coefficients as the non-gradient kernel */
         double za[SHL__ZH_BLOCK];
@@ -79,14 +193,6 @@ void SHL_ISA_SUFFIX(shl__poly_zh_grad)(const struct shl__poly_geom *g, int lmax,
  * without AVX): each weight is read once for all 4, and every coefficient is the sum over
  * k = 0, 1, ... in order, the sums of shl__zh_to_sh (so the coefficients equal
  * shl_polygon's bit for bit). */
-#if ZW >= 4
-#define ZQ 4 /* doubles per vector in grad_sh; NQ vectors hold the 4 outputs */
-#else
-#define ZQ 2
-#endif
-enum { NQ = 4 / ZQ };
-typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
-
 /* out rows m0 .. m0 + R - 1 (index at + step m) = sum_k W[m][k] in[k], W row-major with
  * cols columns: the R rows' sums side by side (R independent add chains instead of one) */
 __attribute__((always_inline)) static inline void quad_rows(const double *w, int m0, const int R, int cols,
