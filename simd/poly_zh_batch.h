@@ -134,20 +134,21 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
     if (lmax >= 1) surf[1] = sum[0][0][0] * 0.5; /* S_1, Eq. 25 */
     for (int l = 2; l <= lmax; ++l) surf[l] = bc->s_b[l] * sum[l - 1][0][0] + bc->s_s[l] * surf[l - 2]; /* Eq. 29 */
     for (int l = 0; l <= lmax; ++l) { /* Eq. 13 */
-        const double kl = bc->norm[l], kg = zh4 ? bc->norm[l] * gscale : kl;
-        double o[4];
-        for (int h = 0; h < NQ; ++h) {
-            const zq x = sum[l][h] * kg;
-            memcpy(o + h * ZQ, &x, sizeof x);
-        }
-        o[0] = kl * surf[l];
-        if (zh4) {
-            memcpy(zh4 + 4 * ((ptrdiff_t)l * ndir + d), o, sizeof o);
+        const double kl = bc->norm[l];
+        if (zh4) { /* the sums' vectors times K_l gscale, then the value over lane 0 (not read back) */
+            double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d);
+            for (int h = 0; h < NQ; ++h) {
+                const zq x = sum[l][h] * (bc->norm[l] * gscale);
+                memcpy(o + h * ZQ, &x, sizeof x);
+            }
+            o[0] = kl * surf[l];
             continue;
         }
         const ptrdiff_t at = (ptrdiff_t)d * SHL__ZH_STRIDE + l;
-        if (!area) zh[at] = o[0];
-        for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = o[1 + ax];
+        double o[4];
+        memcpy(o, sum[l], sizeof o);
+        if (!area) zh[at] = kl * surf[l];
+        for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = kl * o[1 + ax];
     }
 }
 #undef lv_load
