@@ -402,8 +402,9 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
      * unscaling).  The Hessian (polygon_hess.c) is quadratic in them and unscales by grad_scale
      * twice: consistent too.  |edge| <= 4 and |c| >= 2^-1074 bound the shift by 77. */
     int shift = 0;
-    for (int e = 0; e < m; ++e)
-        if (clen_e[e] > 0.0) shift = imax(shift, shl__ilogb(norm3(edges[e])) - shl__ilogb(clen_e[e]) + 1 - 1000);
+    for (int e = 0; e < m; ++e) /* edge components below 4: ilogb |edge| <= 2, so |c| >= 2^-996 adds no shift */
+        if (clen_e[e] > 0.0 && clen_e[e] < 0x1p-996)
+            shift = imax(shift, shl__ilogb(norm3(edges[e])) - shl__ilogb(clen_e[e]) + 1 - 1000);
     if (shift > 0) shl__pow2_split(shift - ex, g->grad_scale);
     /* A loop of its own: the edges' division chains (mu, then gvec) overlap. */
     for (int e = 0; e < m; ++e) {
