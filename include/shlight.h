@@ -319,6 +319,29 @@ int shl_grid_interp(const shl_grid *grid, int method, double taylor_b, int npts,
  */
 int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts,
                             double *rgb, int nthreads, int *nclamped);
+/**
+ * shl_grid_interp for float consumers (shaders), on float grids: float points
+ * pts[3*p .. 3*p+2] (finite) into float rgb + 3*nc*p, summed in float by the SIMD
+ * kernel of the grid's context (8 coefficients per AVX2 vector, 16 per AVX-512, 4
+ * per NEON; SHLIGHT_ISA=scalar: the plain C reference).  The cell and weights are
+ * those of shl_grid_interp at the point (x, y, z widened to double), formed in
+ * double and rounded to float once (Hermite: multiplied out into one weight per
+ * corner row).  Error model (README "Grid interpolation"): every output is within
+ * gamma_n L M of the exact interpolant, gamma_n = n 2^-24 / (1 - n 2^-24), where
+ * M is the largest |value| and |gradient_a| h[a] among the 8 corner entries it
+ * reads and n, L = 9, 1 (trilinear), 18, 4 (Taylor), 18, 1.75 (Hermite): about
+ * 4.5, 36 and 15.8 FLT_EPSILON M (plus at most 2^-45 M + 2^-144 from float
+ * underflow).  So trilinear can leave its corners' range by that much; a point on
+ * a node gets the node's value exactly; results are finite when L M (1 + gamma_n)
+ * <= FLT_MAX.  Same clamping, same taylor_b and nthreads rules as shl_grid_interp;
+ * results do not depend on nthreads.  Errors before anything is written: those of
+ * shl_grid_interp (SHL_ENULL, SHL_EDOMAIN, SHL_ENONFINITE for a non-finite
+ * coordinate or taylor_b); SHL_EDOMAIN for a double grid (use shl_grid_interp)
+ * and, for Taylor and Hermite, whose weights carry the spacing, for a grid with
+ * some spacing h[a] outside [2^-100, 2^127]; SHL_ETHREAD as shl_grid_interp.
+ */
+int shl_grid_interp_f(const shl_grid *grid, int method, double taylor_b, int npts, const float *pts, float *rgb,
+                      int nthreads);
 
 /* ---- adaptive multi-level SH grids (beyond Wu 2020 Sec. 7.3; issue 19) ---- */
 /**

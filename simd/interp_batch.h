@@ -151,36 +151,14 @@ static void hermite_nested(const float *const f[8], const shl__interp_point *s, 
 
 /* Wu 2020 Alg. 4 as one weighted sum of the 32 rows it reads: the nesting
  * along x (lines 4-7), y (lines 8-11) and z (line 12) multiplied out, each
- * row's weight computed once per point in double (hermite_row_weights), so
+ * row's weight computed once per point in double (shl__hermite_row_weights,
+ * simd/kernel_api.h), so
  * that out = sum_j w_j v_j + wd_j . grad_j as in Taylor.  The reference's value up
  * to the rounding of the weights' products and the order of the sum (double,
  * a few ulps).  Row by row: each weight is broadcast once for 4 consecutive
  * blocks, corners 0-3 and 4-7 summed apart, then added: 8 independent FMA
  * chains (the nested form's chains and 16 broadcast weights spilled registers;
  * per point -8% at lmax 4 on the AMD EPYC guest). */
-
-/* The weights of the nested form's rows: out = z0 h0 + z1 h0_z + z2 h1 + z3 h1_z
- * weighs g[q], g_y[q], g_z[q] (pair q: corners 2q, 2q+1) by G[q], Gy[q], Gz[q];
- * so corner 2q's value by G x0, its x-gradient by G x1, its y and z ones by
- * Gy vx, Gz vx; corner 2q+1's by G x2, G x3, Gy ux, Gz ux. */
-static void hermite_row_weights(const shl__interp_point *s, double w[8], double wd[8][3])
-{
-    const double *x = s->hw[0], *y = s->hw[1], *z = s->hw[2];
-    const double ux = s->u[0], vx = 1.0 - ux, uy = s->u[1], vy = 1.0 - uy;
-    const double G[4] = {z[0] * y[0], z[0] * y[2], z[2] * y[0], z[2] * y[2]};
-    const double Gy[4] = {z[0] * y[1], z[0] * y[3], z[2] * y[1], z[2] * y[3]};
-    const double Gz[4] = {z[1] * vy, z[1] * uy, z[3] * vy, z[3] * uy};
-    for (int q = 0; q < 4; ++q) {
-        w[2 * q] = G[q] * x[0];
-        wd[2 * q][0] = G[q] * x[1];
-        wd[2 * q][1] = Gy[q] * vx;
-        wd[2 * q][2] = Gz[q] * vx;
-        w[2 * q + 1] = G[q] * x[2];
-        wd[2 * q + 1][0] = G[q] * x[3];
-        wd[2 * q + 1][1] = Gy[q] * ux;
-        wd[2 * q + 1][2] = Gz[q] * ux;
-    }
-}
 
 /* One row times weight w into nb (3 or 4, a constant where inlined) consecutive blocks. */
 __attribute__((always_inline)) static inline void row_blocks(double w, const float *row, int nb, vd *a0, vd *a1,
@@ -244,7 +222,7 @@ static void hermite(const float *const f[8], const shl__interp_point *s, int nc,
         return;
     }
     double w[8], wd[8][3];
-    hermite_row_weights(s, w, wd);
+    shl__hermite_row_weights(s, w, wd);
     const int groups = nc / width, rest = nc - groups * width;
     shl__interp_ahead_plan(ahead, 3 * (size_t)(groups + (rest > 0)));
     for (int c = 0; c < 3; ++c) {
@@ -279,6 +257,155 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
         taylor(f, s, nc, ahead, out);
     else
         hermite(f, s, nc, ahead, out);
+    shl__interp_ahead_finish(ahead);
+}
+#endif
+
+/* ---- Float sums (shl_grid_interp_f) ----
+ * The same across-coefficient layout with float lanes (SHL_VLEN per vector) and
+ * the point's weights already rounded to float (shl__interp_point_ff): plain
+ * float loads, float FMAs, in the order of the reference shl__interp_ff_ref
+ * (src/interp.c) -- trilinear, corners 0..7 in one chain; Taylor and Hermite
+ * (both sum_j w_j v_j + wd_j . grad_j), per channel, corners 0-3 and 4-7 in
+ * two chains, then added -- so every term sees at most the roundings README
+ * "Grid interpolation" counts.  The scalar helper (one lane) forwards to the
+ * reference; so do rows shorter than a vector (lmax 0-1 on avx2), unless the
+ * helper names a narrower kernel, SHL_INTERP_FF_SHORT_ROWS. */
+#if SHL_VLEN == 1
+void ISA(shl__interp_ff)(const float *data, int method, int nc, const shl__interp_point_ff *s, shl__interp_ahead *ahead,
+                         float *out)
+{
+    shl__interp_ff_ref(data, method, nc, s, ahead, out);
+}
+#else
+#define VFL SHL_VLEN
+#ifdef SHL_INTERP_FF_SHORT_ROWS
+void SHL_INTERP_FF_SHORT_ROWS(const float *data, int method, int nc, const shl__interp_point_ff *s,
+                              shl__interp_ahead *ahead, float *out);
+#endif
+
+/* Start of the float block after k in a row of n >= VFL: the last one ends at n. */
+static inline int fblock_start(int k, int n) { return k + VFL <= n ? k : n - VFL; }
+
+static void ff_trilinear(const float *const f[8], const shl__interp_point_ff *s, int nc, shl__interp_ahead *ahead,
+                         float *out)
+{
+    const int n = 3 * nc;
+    vf w[8];
+    for (int j = 0; j < 8; ++j) w[j] = vf_set1(s->w[j]);
+    shl__interp_ahead_plan(ahead, (size_t)(n + VFL - 1) / VFL);
+    for (int k = 0; k < n; k += VFL) {
+        const int i = fblock_start(k, n);
+        shl__interp_ahead_step(ahead);
+        vf v = vf_mul(w[0], vf_load(f[0] + i));
+        for (int j = 1; j < 8; ++j) v = vf_fma(w[j], vf_load(f[j] + i), v);
+        vf_store(out + i, v);
+    }
+}
+
+/* One row times weight w into the nb (1-4, a constant where inlined) blocks at row + k[b]. */
+__attribute__((always_inline)) static inline void ff_row(float w, const float *row, const int k[4], int nb, vf *a0,
+                                                         vf *a1, vf *a2, vf *a3)
+{
+    const vf wv = vf_set1(w);
+    *a0 = vf_fma(wv, vf_load(row + k[0]), *a0);
+    if (nb > 1) *a1 = vf_fma(wv, vf_load(row + k[1]), *a1);
+    if (nb > 2) *a2 = vf_fma(wv, vf_load(row + k[2]), *a2);
+    if (nb > 3) *a3 = vf_fma(wv, vf_load(row + k[3]), *a3);
+}
+
+/* Corner f's four rows of a channel (value at vo, gradients at gxo + a nc) with weights w, wd. */
+__attribute__((always_inline)) static inline void ff_corner(const float *f, float w, const float wd[3], int nc,
+                                                            size_t vo, size_t gxo, const int k[4], int nb, vf *a0,
+                                                            vf *a1, vf *a2, vf *a3)
+{
+    ff_row(w, f + vo, k, nb, a0, a1, a2, a3);
+    ff_row(wd[0], f + gxo, k, nb, a0, a1, a2, a3);
+    ff_row(wd[1], f + gxo + nc, k, nb, a0, a1, a2, a3);
+    ff_row(wd[2], f + gxo + 2 * (size_t)nc, k, nb, a0, a1, a2, a3);
+}
+
+/* Channel c's nb blocks starting at block b: each weight broadcast once for nb
+ * blocks, 2 nb independent FMA chains.  Each lane's sum is the same whatever nb
+ * and wherever its block starts (an overlapping last block rewrites equal values). */
+__attribute__((always_inline)) static inline void ff_blocks(const float *const f[8], const shl__interp_point_ff *s,
+                                                            int nc, int c, int b, int nb, float *out)
+{
+    const size_t vo = (size_t)c * nc, gxo = 3 * (size_t)nc + 3 * (size_t)c * nc;
+    int k[4] = {0, 0, 0, 0};
+    for (int i = 0; i < nb; ++i) k[i] = fblock_start((b + i) * VFL, nc);
+    const vf zero = vf_set1(0.0f);
+    vf a0 = zero, a1 = zero, a2 = zero, a3 = zero, b0 = zero, b1 = zero, b2 = zero, b3 = zero;
+    for (int j = 0; j < 4; ++j) {
+        ff_corner(f[j], s->w[j], s->wd[j], nc, vo, gxo, k, nb, &a0, &a1, &a2, &a3);
+        ff_corner(f[j + 4], s->w[j + 4], s->wd[j + 4], nc, vo, gxo, k, nb, &b0, &b1, &b2, &b3);
+    }
+    vf_store(out + vo + k[0], vf_add(a0, b0));
+    if (nb > 1) vf_store(out + vo + k[1], vf_add(a1, b1));
+    if (nb > 2) vf_store(out + vo + k[2], vf_add(a2, b2));
+    if (nb > 3) vf_store(out + vo + k[3], vf_add(a3, b3));
+}
+
+static void ff_blocks1(const float *const f[8], const shl__interp_point_ff *s, int nc, int c, int b, float *out)
+{
+    ff_blocks(f, s, nc, c, b, 1, out);
+}
+
+static void ff_blocks2(const float *const f[8], const shl__interp_point_ff *s, int nc, int c, int b, float *out)
+{
+    ff_blocks(f, s, nc, c, b, 2, out);
+}
+
+static void ff_blocks3(const float *const f[8], const shl__interp_point_ff *s, int nc, int c, int b, float *out)
+{
+    ff_blocks(f, s, nc, c, b, 3, out);
+}
+
+static void ff_blocks4(const float *const f[8], const shl__interp_point_ff *s, int nc, int c, int b, float *out)
+{
+    ff_blocks(f, s, nc, c, b, 4, out);
+}
+
+/* Taylor and Hermite: per channel, its ceil(nc / VFL) blocks in groups of 4
+ * (lmax 4 on avx2: 25 = 8 + 8 + 8 + 1, blocks at 0, 8, 16, 17, one group; lmax 8:
+ * 11 blocks, groups of 4, 4, 3). */
+static void ff_gradient_form(const float *const f[8], const shl__interp_point_ff *s, int nc, shl__interp_ahead *ahead,
+                             float *out)
+{
+    const int nblk = (nc + VFL - 1) / VFL;
+    shl__interp_ahead_plan(ahead, 3 * (size_t)((nblk + 3) / 4));
+    for (int c = 0; c < 3; ++c)
+        for (int b = 0; b < nblk; b += 4) {
+            shl__interp_ahead_step(ahead);
+            const int nb = nblk - b < 4 ? nblk - b : 4;
+            if (nb == 4)
+                ff_blocks4(f, s, nc, c, b, out);
+            else if (nb == 3)
+                ff_blocks3(f, s, nc, c, b, out);
+            else if (nb == 2)
+                ff_blocks2(f, s, nc, c, b, out);
+            else
+                ff_blocks1(f, s, nc, c, b, out);
+        }
+}
+
+void ISA(shl__interp_ff)(const float *data, int method, int nc, const shl__interp_point_ff *s, shl__interp_ahead *ahead,
+                         float *out)
+{
+    if (nc < VFL) {
+#ifdef SHL_INTERP_FF_SHORT_ROWS
+        SHL_INTERP_FF_SHORT_ROWS(data, method, nc, s, ahead, out);
+#else
+        shl__interp_ff_ref(data, method, nc, s, ahead, out);
+#endif
+        return;
+    }
+    const float *f[8];
+    for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
+    if (method == SHL_INTERP_TRILINEAR)
+        ff_trilinear(f, s, nc, ahead, out);
+    else
+        ff_gradient_form(f, s, nc, ahead, out);
     shl__interp_ahead_finish(ahead);
 }
 #endif

@@ -107,6 +107,48 @@ static inline void shl__interp_ahead_finish(shl__interp_ahead *a)
 typedef void (*shl__interp_fn)(const float *data, int method, int nc, const shl__interp_point *s,
                                shl__interp_ahead *ahead, double *out);
 
+/* Float-output interpolation at one point (shl_grid_interp_f): every method as a
+ * weighted sum of corner rows, weights formed in double by src/interp.c and
+ * rounded to float.  Trilinear: out[i] = sum_j w_j f_j[i] over the 3 nc values;
+ * Taylor (Annen Eq. 15) and Hermite (Wu Alg. 4 multiplied out,
+ * shl__hermite_row_weights): per channel c, out[c nc + k] = sum_j w_j v_j[k] +
+ * wd_j . grad_j[k], summed as corners 0-3 plus corners 4-7 (README "Grid
+ * interpolation" counts the roundings). */
+typedef struct {
+    size_t ofs[8];   /* as shl__interp_point */
+    float w[8];      /* value weights */
+    float wd[8][3];  /* gradient weights (Taylor, Hermite), carrying the spacing */
+} shl__interp_point_ff;
+
+/* The 3 nc values out[c nc + k] of point s from float node data in float sums;
+ * trilinear: method == SHL_INTERP_TRILINEAR (wd unused), else the gradient form. */
+typedef void (*shl__interp_ff_fn)(const float *data, int method, int nc, const shl__interp_point_ff *s,
+                                  shl__interp_ahead *ahead, float *out);
+
+/* Wu 2020 Alg. 4 multiplied out into one weighted sum of the 32 rows it reads:
+ * out = z0 h0 + z1 h0_z + z2 h1 + z3 h1_z weighs g[q], g_y[q], g_z[q] (pair q:
+ * corners 2q, 2q+1) by G[q], Gy[q], Gz[q]; so corner 2q's value by G x0, its
+ * x-gradient by G x1, its y and z ones by Gy vx, Gz vx; corner 2q+1's by G x2,
+ * G x3, Gy ux, Gz ux. */
+static inline void shl__hermite_row_weights(const shl__interp_point *s, double w[8], double wd[8][3])
+{
+    const double *x = s->hw[0], *y = s->hw[1], *z = s->hw[2];
+    const double ux = s->u[0], vx = 1.0 - ux, uy = s->u[1], vy = 1.0 - uy;
+    const double G[4] = {z[0] * y[0], z[0] * y[2], z[2] * y[0], z[2] * y[2]};
+    const double Gy[4] = {z[0] * y[1], z[0] * y[3], z[2] * y[1], z[2] * y[3]};
+    const double Gz[4] = {z[1] * vy, z[1] * uy, z[3] * vy, z[3] * uy};
+    for (int q = 0; q < 4; ++q) {
+        w[2 * q] = G[q] * x[0];
+        wd[2 * q][0] = G[q] * x[1];
+        wd[2 * q][1] = Gy[q] * vx;
+        wd[2 * q][2] = Gz[q] * vx;
+        w[2 * q + 1] = G[q] * x[2];
+        wd[2 * q + 1][0] = G[q] * x[3];
+        wd[2 * q + 1][1] = Gy[q] * ux;
+        wd[2 * q + 1][2] = Gz[q] * ux;
+    }
+}
+
 /* Sphere kernel arguments: the sphere (center, radius > 0, finite), points
  * pts[3p..3p+2] for 0 <= p < npts, outputs as for shl_sphere_batch_f.  work:
  * shl__isa.sphere_work_bytes(lmax, grad != NULL) bytes, any alignment. */
@@ -139,6 +181,7 @@ struct shl__isa {
     size_t (*sphere_work_bytes)(int lmax, int with_grad);
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
+    shl__interp_ff_fn interp_ff; /* float sums (shl_grid_interp_f); scalar: shl__interp_ff_ref */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
     shl__poly_zh_fn poly_zh;           /* shl_polygon's ZH integrals (simd/poly_zh_batch.h) */
     shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
@@ -150,6 +193,10 @@ struct shl__isa {
  * instance of simd/interp_batch.h, and the others for rows shorter than a vector. */
 void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_point *s, shl__interp_ahead *ahead,
                        double *out);
+/* The float-sum reference (src/interp.c): the scalar instance of shl__interp_ff, and
+ * the others' for rows shorter than a float vector. */
+void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp_point_ff *s,
+                        shl__interp_ahead *ahead, float *out);
 
 /* The kernels of one ISA, each defined by its kernel text compiled with that
  * ISA's helper (suffix _<isa>, SHL_ISA_SUFFIX); declared for every line of
@@ -163,6 +210,8 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
                                  float *coeffs, float *grad, void *work);                              \
     void shl__interp_f_##isa(const float *data, int method, int nc, const shl__interp_point *s,         \
                              shl__interp_ahead *ahead, double *out);                                   \
+    void shl__interp_ff_##isa(const float *data, int method, int nc, const shl__interp_point_ff *s,     \
+                              shl__interp_ahead *ahead, float *out);                                   \
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
     void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc); \

@@ -27,6 +27,40 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
     interp_f(data, method, nc, s, ahead, out);
 }
 
+/* The float-sum reference (the scalar instance of simd/interp_batch.h's
+ * shl__interp_ff): the weighted sums of shl__interp_point_ff in plain C and in
+ * the SIMD kernels' order -- trilinear, corners 0..7; Taylor and Hermite, per
+ * channel, corners 0-3 and 4-7 summed apart (value, then x, y, z gradient rows),
+ * then added. */
+void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp_point_ff *s,
+                        shl__interp_ahead *ahead, float *out)
+{
+    shl__interp_ahead_plan(ahead, 1);
+    shl__interp_ahead_step(ahead);
+    const float *f[8];
+    for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
+    if (method == SHL_INTERP_TRILINEAR) {
+        for (int i = 0; i < 3 * nc; ++i) {
+            float v = s->w[0] * f[0][i];
+            for (int j = 1; j < 8; ++j) v += s->w[j] * f[j][i];
+            out[i] = v;
+        }
+        return;
+    }
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < nc; ++k) {
+            float half[2] = {0.0f, 0.0f};
+            for (int j = 0; j < 8; ++j) {
+                const float *gx = f[j] + 3 * nc + 3 * c * nc + k;
+                half[j >> 2] += s->w[j] * f[j][c * nc + k];
+                half[j >> 2] += s->wd[j][0] * gx[0];
+                half[j >> 2] += s->wd[j][1] * gx[nc];
+                half[j >> 2] += s->wd[j][2] * gx[2 * nc];
+            }
+            out[c * nc + k] = half[0] + half[1];
+        }
+}
+
 /* Cell and local coordinates of p, clamped to the box. */
 static void locate(const shl_grid *g, const double p[3], point_setup *s)
 {
@@ -126,15 +160,20 @@ typedef struct {
     int ahead; /* request the next point's rows (grids above SHL__INTERP_AHEAD_BYTES) */
 } interp_job;
 
-static void setup_point(const interp_job *job, long p, point_setup *s)
+static void setup_at(const shl_grid *g, int method, double b, const double x[3], point_setup *s)
 {
-    locate(job->g, job->pts + 3 * p, s);
-    if (job->method == SHL_INTERP_TAYLOR)
-        taylor_weights(job->g, job->b, s);
-    else if (job->method == SHL_INTERP_HERMITE)
-        hermite_weights(job->g, s);
+    locate(g, x, s);
+    if (method == SHL_INTERP_TAYLOR)
+        taylor_weights(g, b, s);
+    else if (method == SHL_INTERP_HERMITE)
+        hermite_weights(g, s);
     else
         trilinear_weights(s);
+}
+
+static void setup_point(const interp_job *job, long p, point_setup *s)
+{
+    setup_at(job->g, job->method, job->b, job->pts + 3 * p, s);
 }
 
 /* The rows point s reads: Taylor and Hermite, all 12 nc elements of each
@@ -176,11 +215,9 @@ static void interp_range(void *arg, int worker, long begin, long end)
     }
 }
 
-/* Shared by both entry points: nclamped (if not NULL) receives the number of
- * points with a coordinate outside [lo[a], hi[a]], counted while validating,
- * in the calling thread (independent of nthreads), and written only on success. */
-static int grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts, double *rgb,
-                       int nthreads, int *nclamped)
+/* The checks of every entry point before its points' (same order). */
+static int check_call(const shl_grid *grid, int method, double taylor_b, int npts, const void *pts, const void *rgb,
+                      int nthreads)
 {
     if (!grid || !pts || !rgb) return SHL_ENULL;
     if (method != SHL_INTERP_TRILINEAR && method != SHL_INTERP_TAYLOR && method != SHL_INTERP_HERMITE)
@@ -190,6 +227,17 @@ static int grid_interp(const shl_grid *grid, int method, double taylor_b, int np
         if (!(taylor_b > 0.0)) return SHL_EDOMAIN;
     }
     if (npts < 0 || nthreads < 1 || nthreads > SHL_MAX_THREADS) return SHL_EDOMAIN;
+    return SHL_OK;
+}
+
+/* Shared by both entry points: nclamped (if not NULL) receives the number of
+ * points with a coordinate outside [lo[a], hi[a]], counted while validating,
+ * in the calling thread (independent of nthreads), and written only on success. */
+static int grid_interp(const shl_grid *grid, int method, double taylor_b, int npts, const double *pts, double *rgb,
+                       int nthreads, int *nclamped)
+{
+    const int bad = check_call(grid, method, taylor_b, npts, pts, rgb, nthreads);
+    if (bad) return bad;
     int outside = 0;
     for (int p = 0; p < npts; ++p) {
         const double *x = pts + 3 * (size_t)p;
@@ -222,4 +270,72 @@ int shl_grid_interp_clamped(const shl_grid *grid, int method, double taylor_b, i
 {
     if (!nclamped) return SHL_ENULL;
     return grid_interp(grid, method, taylor_b, npts, pts, rgb, nthreads, nclamped);
+}
+
+/* ---- Float sums (shl_grid_interp_f) ---- */
+
+typedef struct {
+    const shl_grid *g;
+    int method;
+    double b;
+    const float *pts;
+    float *out;
+    int ahead; /* as interp_job */
+} interp_job_ff;
+
+/* Point p's double set-up s (cell, weights) and its float kernel's view sf:
+ * the row weights (Hermite: multiplied out, shl__hermite_row_weights) rounded
+ * to float once. */
+static void setup_point_ff(const interp_job_ff *job, long p, point_setup *s, shl__interp_point_ff *sf)
+{
+    const float *x = job->pts + 3 * p;
+    const double xd[3] = {x[0], x[1], x[2]};
+    setup_at(job->g, job->method, job->b, xd, s);
+    if (job->method == SHL_INTERP_HERMITE) shl__hermite_row_weights(s, s->w, s->wd); /* w, wd unused by Alg. 4 itself */
+    for (int j = 0; j < 8; ++j) {
+        sf->ofs[j] = s->ofs[j];
+        sf->w[j] = (float)s->w[j];
+        for (int a = 0; a < 3 && job->method != SHL_INTERP_TRILINEAR; ++a) sf->wd[j][a] = (float)s->wd[j][a];
+    }
+}
+
+/* interp_range with float sums: two points in flight, the same look-ahead. */
+static void interp_range_ff(void *arg, int worker, long begin, long end)
+{
+    const interp_job_ff *job = arg;
+    const shl_grid *g = job->g;
+    const size_t nv = 3 * (size_t)g->nc;
+    point_setup s[2];
+    shl__interp_point_ff sf[2];
+    (void)worker;
+    if (begin < end) setup_point_ff(job, begin, &s[begin & 1], &sf[begin & 1]);
+    for (long p = begin; p < end; ++p) {
+        shl__interp_ahead ahead = {.nrange = 0};
+        if (p + 1 < end) {
+            setup_point_ff(job, p + 1, &s[(p + 1) & 1], &sf[(p + 1) & 1]);
+            if (job->ahead) ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
+        }
+        g->isa->interp_ff(g->data, job->method, g->nc, &sf[p & 1], &ahead, job->out + nv * (size_t)p);
+    }
+}
+
+/* Spacings whose float weights (Taylor, Hermite: up to h[a]) neither overflow nor
+ * lose more than 2^-150 |gradient| <= 2^-50 M to underflow (README "Grid interpolation"). */
+#define SPACING_FF_MIN 0x1p-100
+#define SPACING_FF_MAX 0x1p127
+
+int shl_grid_interp_f(const shl_grid *grid, int method, double taylor_b, int npts, const float *pts, float *rgb,
+                      int nthreads)
+{
+    const int bad = check_call(grid, method, taylor_b, npts, pts, rgb, nthreads);
+    if (bad) return bad;
+    if (grid->storage != SHL_GRID_FLOAT) return SHL_EDOMAIN;
+    for (int a = 0; a < 3 && method != SHL_INTERP_TRILINEAR; ++a)
+        if (!(grid->h[a] >= SPACING_FF_MIN && grid->h[a] <= SPACING_FF_MAX)) return SHL_EDOMAIN;
+    for (size_t i = 0; i < 3 * (size_t)npts; ++i)
+        if (!isfinite(pts[i])) return SHL_ENONFINITE;
+    interp_job_ff job = {grid, method, taylor_b, pts, rgb,
+                         grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES};
+    const int nw = shl__parallel_workers(npts, 256, nthreads); /* as grid_interp */
+    return shl__parallel_for_guided(npts, 32, nw, interp_range_ff, &job);
 }

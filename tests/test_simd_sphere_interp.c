@@ -454,3 +454,238 @@ SHL_TEST(simd_interp_extreme_boxes)
         shl_ctx_destroy(ref);
     }
 }
+
+/* ------------------------------------------- float sums (shl_grid_interp_f) */
+
+/* The bound of shl_grid_interp_f (include/shlight.h, README "Grid interpolation"):
+ * gamma_n L M, with n the roundings a term sees (its weight's, its product's and
+ * the sums') and L the sum of the weights' magnitudes in units of M; plus 16
+ * DBL_EPSILON M for the double reference's own roundings and the double set-up,
+ * and the underflow allowance 2^-45 M + 2^-144. */
+static double ff_bound(int method, double M)
+{
+    const double u = 0x1p-24, n = method == SHL_INTERP_TRILINEAR ? 9.0 : 18.0;
+    const double L = method == SHL_INTERP_TRILINEAR ? 1.0 : method == SHL_INTERP_TAYLOR ? 4.0 : 1.75;
+    return n * u / (1.0 - n * u) * L * M + (16.0 * DBL_EPSILON + 0x1p-45) * M + 0x1p-144;
+}
+
+/* Per output entry q = c nc + k, the M of point x's cell: max over its 8 corners
+ * of |value| and |d/dx_a value| h_a of that entry (the cell as src/interp.c's
+ * locate picks it). */
+static void ff_cell_scale(const shl_grid *g, const double lo[3], const double hi[3], const int res[3], const double x[3],
+                          int nc, double *M)
+{
+    static double rgb[3 * IP_NC], grad[9 * IP_NC];
+    int cell[3];
+    double h[3];
+    for (int a = 0; a < 3; ++a) {
+        h[a] = (hi[a] - lo[a]) / (res[a] - 1);
+        const double xc = x[a] < lo[a] ? lo[a] : x[a] > hi[a] ? hi[a] : x[a], t = (xc - lo[a]) / h[a];
+        cell[a] = t < res[a] - 1 ? (int)t : res[a] - 2;
+    }
+    for (int q = 0; q < 3 * nc; ++q) M[q] = 0.0;
+    for (int j = 0; j < 8; ++j) {
+        const int idx[3] = {cell[0] + (j & 1), cell[1] + ((j >> 1) & 1), cell[2] + (j >> 2)};
+        CHECK(shl_grid_get_node(g, idx, rgb, grad) == SHL_OK);
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < nc; ++k) {
+                double m = fabs(rgb[c * nc + k]);
+                for (int a = 0; a < 3; ++a) m = fmax(m, fabs(grad[(3 * c + a) * nc + k]) * h[a]);
+                M[c * nc + k] = fmax(M[c * nc + k], m);
+            }
+    }
+}
+
+/* random_nodes with every node scaled by its own 2^e, -6 <= e <= 6: cells of
+ * different scales, so that the bound is checked against each cell's M. */
+static void ff_nodes(rng_t *r, shl_grid *const *grids, int ngrids, const int res[3], const double h[3], int nc)
+{
+    static double rgb[3 * IP_NC], grad[9 * IP_NC];
+    for (int k = 0; k < res[2]; ++k)
+        for (int j = 0; j < res[1]; ++j)
+            for (int i = 0; i < res[0]; ++i) {
+                const int idx[3] = {i, j, k};
+                const double s = ldexp(1.0, (int)floor(rng_range(r, -6.0, 7.0)));
+                for (int q = 0; q < 3 * nc; ++q) rgb[q] = s * rng_range(r, -1.0, 1.0);
+                for (int c = 0; c < 3; ++c)
+                    for (int a = 0; a < 3; ++a)
+                        for (int q = 0; q < nc; ++q) grad[(3 * c + a) * nc + q] = s * rng_range(r, -1.0, 1.0) / h[a];
+                for (int g = 0; g < ngrids; ++g) CHECK(shl_grid_set_node(grids[g], idx, rgb, grad) == SHL_OK);
+            }
+}
+
+/* Float sums on grids of spacing h (the box lo + (res - 1) h, h[a] = hscale
+ * times 1, 1/2, 1/2: dyadic, so nodes are float points) on every ISA (scalar:
+ * the float reference) against the double reference shl_grid_interp (scalar
+ * context, same float node data) at the same float points, widened: within
+ * ff_bound of each entry's cell M; on nodes the node's value exactly; 3 threads
+ * equal 1.  Returns the worst error / (FLT_EPSILON M) per method in worst[]. */
+static void ff_check(const char *isa, int lmax, double hscale, double worst[3])
+{
+    const char *names[3] = {"trilinear", "Taylor", "Hermite"};
+    const int res[3] = {4, 3, 5};
+    const double h[3] = {hscale, 0.5 * hscale, 0.5 * hscale};
+    const double lo[3] = {-1.0 * hscale, 0.25 * hscale, -0.5 * hscale};
+    const double hi[3] = {lo[0] + 3 * h[0], lo[1] + 2 * h[1], lo[2] + 4 * h[2]};
+    static double pts[3 * IP_NP], ptd[3 * IP_NP], want[3 * IP_NC * IP_NP], M[3 * IP_NC];
+    static float ptf[3 * IP_NP], got[3 * IP_NC * IP_NP], got3[3 * IP_NC * IP_NP];
+    shl_ctx *ctx = isa_ctx(isa, lmax), *ref = isa_ctx("scalar", lmax);
+    if (ctx && ref) {
+        const int nc = SHL_NCOEFFS(lmax), nv = 3 * nc;
+        shl_grid *grids[2] = {NULL, NULL};
+        CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &grids[0]) == SHL_OK);
+        CHECK(shl_grid_create(ref, lo, hi, res, SHL_GRID_FLOAT, &grids[1]) == SHL_OK);
+        rng_t r = {(uint64_t)(500 + lmax)};
+        ff_nodes(&r, grids, 2, res, h, nc);
+        /* interp_points' offsets outside the box (up to 2) times hscale / 4: float points */
+        interp_points(&r, lo, hi, res, pts);
+        for (int q = 0; q < 3 * IP_NP; ++q) {
+            const int a = q % 3;
+            const double x = pts[q] < lo[a] ? lo[a] - (lo[a] - pts[q]) * 0.25 * hscale
+                             : pts[q] > hi[a] ? hi[a] + (pts[q] - hi[a]) * 0.25 * hscale : pts[q];
+            ptf[q] = (float)x;
+            ptd[q] = ptf[q];
+        }
+        for (int m = 0; m < 3; ++m) {
+            const double b = m == SHL_INTERP_TAYLOR ? (lmax % 2 ? 0.7 : 2.0) : 0.0;
+            CHECK(shl_grid_interp_f(grids[0], m, b, IP_NP, ptf, got, 1) == SHL_OK);
+            CHECK(shl_grid_interp_f(grids[0], m, b, IP_NP, ptf, got3, 3) == SHL_OK);
+            CHECK(memcmp(got, got3, sizeof(float) * nv * IP_NP) == 0);
+            CHECK(shl_grid_interp(grids[1], m, b, IP_NP, ptd, want, 1) == SHL_OK);
+            for (int p = 0; p < IP_NP; ++p) {
+                ff_cell_scale(grids[1], lo, hi, res, ptd + 3 * p, nc, M);
+                for (int q = 0; q < nv; ++q) {
+                    const double gq = got[p * nv + q], wq = want[p * nv + q], e = fabs(gq - wq);
+                    if (p % 5 == 1 && gq != wq) /* on a node: the node's value, exactly */
+                        harness_fail(__FILE__, __LINE__, "[%s, lmax %d, h %g] %s at node %d: %a, node value %a", isa,
+                                     lmax, hscale, names[m], p, gq, wq);
+                    if (!(e <= ff_bound(m, M[q])))
+                        harness_fail(__FILE__, __LINE__, "[%s, lmax %d, h %g] %s point %d entry %d: error %.3g M, bound %.3g M",
+                                     isa, lmax, hscale, names[m], p, q, e / M[q], ff_bound(m, M[q]) / M[q]);
+                    if (M[q] > 0.0) worst[m] = fmax(worst[m], e / (FLT_EPSILON * M[q]));
+                }
+            }
+        }
+        shl_grid_destroy(grids[0]);
+        shl_grid_destroy(grids[1]);
+    }
+    shl_ctx_destroy(ctx);
+    shl_ctx_destroy(ref);
+}
+
+/* Every ISA (scalar: the float reference), lmax 0..8 (nc = 1 .. 81 against 4-,
+ * 8- and 16-lane float vectors: short rows, one block, groups of 1-4 blocks and
+ * overlapping last blocks), every method, random points, points on nodes, cell
+ * faces, box faces and clamped outside; spacings 1, 1/2, 1/2 and, at lmax 4,
+ * 2^-99, 2^-100, 2^-100 (the lower limit) and 2^126, 2^125, 2^125 (the box up
+ * to 2^127, so that its points are floats). */
+SHL_TEST(simd_interp_f_vs_reference)
+{
+    double worst[3] = {0, 0, 0};
+    for (int i = 0; i < NISA; ++i)
+        for (int lmax = 0; lmax <= IP_LMAX; ++lmax) ff_check(isas[i], lmax, 1.0, worst);
+    for (int i = 0; i < NISA; ++i) {
+        ff_check(isas[i], 4, 0x1p-99, worst);
+        ff_check(isas[i], 4, 0x1p126, worst);
+    }
+    harness_note("worst |shl_grid_interp_f - double reference| / (FLT_EPSILON M): trilinear %.2f, Taylor %.2f, "
+                 "Hermite %.2f (bounds 4.5, 36, 15.75)",
+                 worst[0], worst[1], worst[2]);
+}
+
+/* Look-ahead and threads change no value: on every ISA, lmax 0, 3, 8, every
+ * method, a grid below and one above SHL__INTERP_AHEAD_BYTES, a call over all
+ * points, an odd sub-range and 3 threads equal one call per point, bit for bit. */
+SHL_TEST(simd_interp_f_lookahead_and_threads)
+{
+    const double lo[3] = {-1.0, 0.25, -0.5}, hi[3] = {1.5, 1.0, 2.5};
+    const int lmaxes[3] = {0, 3, IP_LMAX};
+    static double pts[3 * IP_NP];
+    static float ptf[3 * IP_NP], one[3 * IP_NC * IP_NP], all[3 * IP_NC * IP_NP];
+    for (int i = 0; i < NISA; ++i)
+        for (int l = 0; l < 3; ++l) {
+            shl_ctx *ctx = isa_ctx(isas[i], lmaxes[l]);
+            if (!ctx) continue;
+            const int nv = 3 * SHL_NCOEFFS(lmaxes[l]);
+            for (int big = 0; big < 2; ++big) {
+                int bpn;
+                CHECK(shl_grid_bytes_per_node(lmaxes[l], SHL_GRID_FLOAT, &bpn) == SHL_OK);
+                const int r = (int)ceil(cbrt((double)SHL__INTERP_AHEAD_BYTES / bpn)) + 1;
+                const int res[3] = {big ? r : 4, big ? r : 3, big ? r : 5};
+                CHECK(((size_t)res[0] * res[1] * res[2] * bpn > SHL__INTERP_AHEAD_BYTES) == big);
+                double h[3];
+                for (int a = 0; a < 3; ++a) h[a] = (hi[a] - lo[a]) / (res[a] - 1);
+                shl_grid *g = NULL;
+                CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
+                rng_t rng = {(uint64_t)(170 + l)};
+                random_nodes(&rng, &g, 1, res, h, nv / 3);
+                interp_points(&rng, lo, hi, res, pts);
+                for (int q = 0; q < 3 * IP_NP; ++q) ptf[q] = (float)pts[q];
+                for (int m = 0; m < 3; ++m) {
+                    for (int p = 0; p < IP_NP; ++p)
+                        CHECK(shl_grid_interp_f(g, m, 1.5, 1, ptf + 3 * p, one + (size_t)nv * p, 1) == SHL_OK);
+                    const size_t bytes = sizeof(float) * nv * IP_NP;
+                    CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 1) == SHL_OK);
+                    CHECK(memcmp(one, all, bytes) == 0);
+                    memset(all, 0, bytes);
+                    CHECK(shl_grid_interp_f(g, m, 1.5, 101, ptf + 3 * 7, all + (size_t)nv * 7, 1) == SHL_OK);
+                    CHECK(memcmp(one + (size_t)nv * 7, all + (size_t)nv * 7, sizeof(float) * nv * 101) == 0);
+                    CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 3) == SHL_OK);
+                    CHECK(memcmp(one, all, bytes) == 0);
+                }
+                shl_grid_destroy(g);
+            }
+            shl_ctx_destroy(ctx);
+        }
+}
+
+/* Errors before anything is written: those of shl_grid_interp, a double grid,
+ * spacings outside [2^-100, 2^127] for Taylor and Hermite (trilinear runs), a
+ * non-finite coordinate of the last point. */
+SHL_TEST(grid_interp_f_errors)
+{
+    shl_ctx *ctx = NULL;
+    CHECK(shl_ctx_create(2, &ctx) == SHL_OK);
+    const int res[3] = {2, 3, 2};
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    shl_grid *g = NULL, *gd = NULL;
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &g) == SHL_OK);
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_DOUBLE, &gd) == SHL_OK);
+    float pts[6] = {0.5f, 0.5f, 0.5f, 0.25f, 0.75f, 2.0f}, out[54];
+    for (int k = 0; k < 54; ++k) out[k] = 7.0f;
+    CHECK(shl_grid_interp_f(NULL, 0, 0.0, 2, pts, out, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, 2, NULL, out, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, 2, pts, NULL, 1) == SHL_ENULL);
+    CHECK(shl_grid_interp_f(g, 3, 0.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, -1, 0.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, SHL_INTERP_TAYLOR, NAN, 2, pts, out, 1) == SHL_ENONFINITE);
+    CHECK(shl_grid_interp_f(g, SHL_INTERP_TAYLOR, 0.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, SHL_INTERP_TAYLOR, -1.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, -1, pts, out, 1) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, 2, pts, out, 0) == SHL_EDOMAIN);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, 2, pts, out, SHL_MAX_THREADS + 1) == SHL_EDOMAIN);
+    for (int m = 0; m < 3; ++m) CHECK(shl_grid_interp_f(gd, m, 1.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    pts[5] = NAN; /* the last point: checked before anything is written */
+    CHECK(shl_grid_interp_f(g, SHL_INTERP_HERMITE, 0.0, 2, pts, out, 1) == SHL_ENONFINITE);
+    pts[5] = -INFINITY;
+    CHECK(shl_grid_interp_f(g, SHL_INTERP_TRILINEAR, 0.0, 2, pts, out, 1) == SHL_ENONFINITE);
+    pts[5] = 2.0f;
+    /* spacings just outside [2^-100, 2^127]: 2^-101 and 2^128 on axis 1 */
+    const double tiny[3] = {0x1p-100, 2 * 0x1p-101, 0x1p-100}, huge[3] = {1, 2 * 0x1p128, 1};
+    shl_grid *gt = NULL, *gh = NULL;
+    CHECK(shl_grid_create(ctx, lo, tiny, res, SHL_GRID_FLOAT, &gt) == SHL_OK);
+    CHECK(shl_grid_create(ctx, lo, huge, res, SHL_GRID_FLOAT, &gh) == SHL_OK);
+    for (int m = SHL_INTERP_TAYLOR; m <= SHL_INTERP_HERMITE; ++m) {
+        CHECK(shl_grid_interp_f(gt, m, 1.0, 2, pts, out, 1) == SHL_EDOMAIN);
+        CHECK(shl_grid_interp_f(gh, m, 1.0, 2, pts, out, 1) == SHL_EDOMAIN);
+    }
+    for (int k = 0; k < 54; ++k) CHECK(out[k] == 7.0f);
+    CHECK(shl_grid_interp_f(g, 0, 0.0, 0, pts, out, 1) == SHL_OK && out[0] == 7.0f);
+    CHECK(shl_grid_interp_f(gt, SHL_INTERP_TRILINEAR, 0.0, 2, pts, out, 1) == SHL_OK && out[0] == 0.0f);
+    CHECK(shl_grid_interp_f(gh, SHL_INTERP_TRILINEAR, 0.0, 2, pts, out, 1) == SHL_OK && out[0] == 0.0f);
+    shl_grid_destroy(g);
+    shl_grid_destroy(gd);
+    shl_grid_destroy(gt);
+    shl_grid_destroy(gh);
+    shl_ctx_destroy(ctx);
+}

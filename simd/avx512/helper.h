@@ -68,6 +68,8 @@ static inline vd vd_fma(vd a, vd b, vd c) { return _mm512_fmadd_pd(a, b, c); }
  * (4 lanes; avx512 support includes AVX2 and FMA) instead of the scalar
  * reference: 2.3x faster (bench/bench_simd.c --isa-only, Hermite at lmax 1). */
 #define SHL_INTERP_SHORT_ROWS shl__interp_f_avx2
+/* Likewise the float sums (shl__interp_ff): rows of 8 to 15 floats (lmax 2) on the avx2 kernel. */
+#define SHL_INTERP_FF_SHORT_ROWS shl__interp_ff_avx2
 
 /* Four rows r0..r3 (16 lanes) to u0..u3 with, in 128-bit block q, element 4q + k
  * of the four rows in u_k (simd/avx2/helper.h within each block: unpack pairs
