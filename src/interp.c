@@ -295,8 +295,10 @@ static void setup_point_ff(const interp_job_ff *job, long p, point_setup *s, shl
     for (int j = 0; j < 8; ++j) {
         sf->ofs[j] = s->ofs[j];
         sf->w[j] = (float)s->w[j];
-        for (int a = 0; a < 3 && job->method != SHL_INTERP_TRILINEAR; ++a) sf->wd[j][a] = (float)s->wd[j][a];
     }
+    if (job->method != SHL_INTERP_TRILINEAR) /* fixed trip counts: vectorized conversions */
+        for (int j = 0; j < 8; ++j)
+            for (int a = 0; a < 3; ++a) sf->wd[j][a] = (float)s->wd[j][a];
 }
 
 /* interp_range with float sums: two points in flight, the same look-ahead. */
