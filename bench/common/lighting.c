@@ -332,7 +332,11 @@ static void eval_block(void *arg, int worker, long begin, long end)
             goto fail;
         break;
     case LM_GRID:
-        if (shl_grid_interp(L->grid, L->m.interp, L->m.taylor_b, nb, pts, out, 1) != SHL_OK) goto fail;
+        if (L->m.grid_storage == SHL_GRID_FLOAT) { /* float sums, straight into coef (shl_grid_interp_f) */
+            for (int k = 0; k < 3 * nb; ++k) pf[k] = (float)pts[k];
+            if (shl_grid_interp_f(L->grid, L->m.interp, L->m.taylor_b, nb, pf, coef, 1) != SHL_OK) goto fail;
+        } else if (shl_grid_interp(L->grid, L->m.interp, L->m.taylor_b, nb, pts, out, 1) != SHL_OK)
+            goto fail;
         break;
     case LM_AGRID:
         if (shl_agrid_interp(L->agrid, nb, pts, out, 1) != SHL_OK) goto fail;
@@ -378,7 +382,7 @@ static void eval_block(void *arg, int worker, long begin, long end)
         }
         break;
     }
-    if (L->m.kind != LM_ANALYTIC_F) {
+    if (L->m.kind != LM_ANALYTIC_F && !(L->m.kind == LM_GRID && L->m.grid_storage == SHL_GRID_FLOAT)) {
         /* rounded to float in runs of 8 (gcc -O2 vectorizes the fixed-count inner loop: the
          * scalar conversion loop took ~10% of the grid path's interpolation time) */
         const size_t total = 3 * (size_t)nc * (size_t)nb, runs = total / 8 * 8;
