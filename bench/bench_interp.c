@@ -17,6 +17,9 @@
  *    the part vectorizing across coefficients does not touch; 2 threads against 1,
  *    with the CPU efficiency (process CPU time, 1 thread / 2 threads) and, from DRAM, the share
  *    of the read bandwidth of both cores together (the memory-bound ceiling);
+ *  - float output: shl_grid_interp_f (float vertices, float sums, float output) against
+ *    shl_grid_interp, Hermite at lmax 4 and 8, L2 and DRAM, alternated in the same rounds
+ *    (CSV section float_out: ns_simd is the float call's, ns_reference the double call's);
  *  - the papers' implied GPU throughput (Wang 2018, Wu 2020 Table 1) next to ours.
  * CSV: build/bench/bench_interp.csv (-o overrides); --help; --mb caps the out-of-cache size. */
 #if defined(__linux__) && !defined(_DEFAULT_SOURCE)
@@ -223,6 +226,18 @@ typedef struct {
     int wall;            /* timed by the wall clock even with --cpu-time (thread comparisons) */
 } job;
 
+/* shl_grid_interp_f on job j's grid, method, chunks and vertices as floats (ptsf, outf): seconds per vertex. */
+static double run_f(const job *j, const float *ptsf, float *outf)
+{
+    double (*now)(void) = j->wall ? bench_now : one_core_now;
+    const double t0 = now();
+    for (long p = 0; p < j->npts; p += j->chunk)
+        must(shl_grid_interp_f(j->g, j->method, 2.0, (int)j->chunk, ptsf + 3 * p, outf, j->nthreads), "interp_f");
+    const double t = now() - t0;
+    bench_sink += outf[1];
+    return t / (double)j->npts;
+}
+
 static double run(const job *j) /* seconds per vertex */
 {
     double (*now)(void) = j->wall ? bench_now : one_core_now;
@@ -312,8 +327,9 @@ int main(int argc, char **argv)
              "(random vertex order), the SIMD kernel against the scalar reference, with and without the\n"
              "look-ahead (calls of one vertex: the order before it), bytes per vertex and the share of this\n"
              "core's read bandwidth (DRAM, resp. L2, measured in the same run), random vs cell-sorted vertex\n"
-             "order, 2 threads against 1 (from DRAM: the share of both cores' read bandwidth together), and the\n"
-             "papers' GPU throughput next to ours.\n"
+             "order, 2 threads against 1 (from DRAM: the share of both cores' read bandwidth together), float output\n"
+             "(shl_grid_interp_f) against double output for Hermite at lmax 4 and 8, and the papers' GPU throughput\n"
+             "next to ours.\n"
              "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
              "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
              "--mb "
@@ -426,6 +442,11 @@ int main(int argc, char **argv)
            "| no look-ahead ns/vertex | of read BW | look-ahead speed-up |\n");
     printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     double *out = xmalloc(sizeof(double) * CHUNK * 3 * SHL_NCOEFFS(8) * 64);
+    /* float output (shl_grid_interp_f): the same vertices as floats; per lmax 4, 8 and grid, the
+     * double and float timings of Hermite alternated in the same rounds, printed after this table */
+    float *ptsf = xmalloc(sizeof(float) * 3 * NPTS), *outf = xmalloc(sizeof(float) * CHUNK * 3 * SHL_NCOEFFS(8));
+    for (int k = 0; k < 3 * NPTS; ++k) ptsf[k] = (float)pts[k];
+    double fo_d[3][2], fo_f[3][2], fo_sp[3][2]; /* [lmax index][big]: s/vertex double, float; speed-up */
     for (int li = lfirst; li < 3; ++li) {
         const int lmax = lmaxes[li], nc = SHL_NCOEFFS(lmax);
         shl_ctx *ctx, *ctx_ref;
@@ -472,6 +493,21 @@ int main(int argc, char **argv)
                     fprintf(csv, "interp,%d,%s,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f,%.2f,%.3f,\n", lmax, mname[m],
                             big ? "dram" : "l2", isa, ms * 1e9, mr * 1e9, msp, 1e-6 / ms, bpv, gbs * 1e-9, gbs / peak, m1 * 1e9,
                             bpv / m1 / peak);
+                if (m == SHL_INTERP_HERMITE && lmax > 0) {
+                    double td[MAX_ROUNDS], tf[MAX_ROUNDS], spf[MAX_ROUNDS];
+                    run_f(&js, ptsf, outf);
+                    for (int r = 0; r < rounds; ++r) {
+                        td[r] = tf[r] = 0.0;
+                        for (long q = 0; q < reps; ++q) {
+                            td[r] += run(&js) / reps;
+                            tf[r] += run_f(&js, ptsf, outf) / reps;
+                        }
+                        spf[r] = td[r] / tf[r];
+                    }
+                    fo_d[li][big] = bench_median(td, rounds);
+                    fo_f[li][big] = bench_median(tf, rounds);
+                    fo_sp[li][big] = bench_median(spf, rounds);
+                }
             }
             shl_grid_destroy(g);
             shl_grid_destroy(gr);
@@ -479,6 +515,25 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx);
         shl_ctx_destroy(ctx_ref);
     }
+
+    printf("\n## Float output, Hermite, one core: shl_grid_interp_f (float vertices, float sums, float output) vs\n"
+           "shl_grid_interp (double vertices, sums and output), SIMD kernel (%s)\n\n"
+           "The grids, vertices and chunks of the table above; the two alternated in the same rounds.  of read BW:\n"
+           "grid bytes/vertex x vertices/s / the read bandwidth above (DRAM rows: DRAM read; L2 rows: L2 read).\n\n",
+           isa);
+    printf("| lmax | grid | double output ns/vertex | float output ns/vertex | float / double speed-up | of read BW, double "
+           "| of read BW, float |\n|---|---|---|---|---|---|---|\n");
+    for (int li = lfirst > 1 ? lfirst : 1; li < 3; ++li)
+        for (int big = 0; big <= 1; ++big) {
+            const int lmax = lmaxes[li];
+            const double bpv = bytes_per_vertex(SHL_INTERP_HERMITE, SHL_NCOEFFS(lmax)), peak = big ? read_peak : l2_peak;
+            printf("| %d | %s | %.1f | %.1f | **%.2fx** | %.0f%% | **%.0f%%** |\n", lmax, big ? "DRAM" : "L2", fo_d[li][big] * 1e9,
+                   fo_f[li][big] * 1e9, fo_sp[li][big], 100.0 * bpv / fo_d[li][big] / peak, 100.0 * bpv / fo_f[li][big] / peak);
+            if (csv)
+                fprintf(csv, "float_out,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,%.3f,%.0f,%.3f,%.3f,,,\n", lmax, big ? "dram" : "l2", isa,
+                        fo_f[li][big] * 1e9, fo_d[li][big] * 1e9, fo_sp[li][big], 1e-6 / fo_f[li][big], bpv,
+                        bpv / fo_f[li][big] * 1e-9, bpv / fo_f[li][big] / peak);
+        }
 
     printf("\nThe two lmax-8 out-of-cache grids (shl_grid_create: library allocation): %.0f MB of this process in huge pages.\n",
            grid_huge_mb);
@@ -597,6 +652,8 @@ int main(int argc, char **argv)
     bench_progress("done; wrote %s", csv_path);
     free(pts);
     free(out);
+    free(ptsf);
+    free(outf);
     free(big_out);
     shl_ctx_destroy(probe);
     return 0;
