@@ -291,14 +291,20 @@ static void setup_point_ff(const interp_job_ff *job, long p, point_setup *s, shl
     const float *x = job->pts + 3 * p;
     const double xd[3] = {x[0], x[1], x[2]};
     setup_at(job->g, job->method, job->b, xd, s);
-    if (job->method == SHL_INTERP_HERMITE) shl__hermite_row_weights(s, s->w, s->wd); /* w, wd unused by Alg. 4 itself */
-    for (int j = 0; j < 8; ++j) {
-        sf->ofs[j] = s->ofs[j];
-        sf->w[j] = (float)s->w[j];
+    for (int j = 0; j < 8; ++j) sf->ofs[j] = s->ofs[j];
+    if (job->method == SHL_INTERP_HERMITE) {
+        double w[8], wd[8][3]; /* locals: kept in registers, not stored and reloaded */
+        shl__hermite_row_weights(s, w, wd);
+        for (int j = 0; j < 8; ++j) {
+            sf->w[j] = (float)w[j];
+            for (int a = 0; a < 3; ++a) sf->wd[j][a] = (float)wd[j][a];
+        }
+        return;
     }
-    if (job->method != SHL_INTERP_TRILINEAR) /* fixed trip counts: vectorized conversions */
-        for (int j = 0; j < 8; ++j)
-            for (int a = 0; a < 3; ++a) sf->wd[j][a] = (float)s->wd[j][a];
+    for (int j = 0; j < 8; ++j) {
+        sf->w[j] = (float)s->w[j];
+        for (int a = 0; a < 3 && job->method == SHL_INTERP_TAYLOR; ++a) sf->wd[j][a] = (float)s->wd[j][a];
+    }
 }
 
 /* interp_range with float sums: two points in flight, the same look-ahead. */
