@@ -38,6 +38,8 @@
  *  - interp with 1 or 2 threads gives identical results (documented);
  *  - shl_grid_interp_clamped: the values of shl_grid_interp (bit for bit), and a
  *    clamped count equal to the number of points with a coordinate outside [lo, hi];
+ *  - shl_grid_interp_f: its error codes, nothing written on error, else within its
+ *    documented bound of shl_grid_interp at the same float points;
  *  - shl_grid_lights_in_box: 0 <= in-box count <= near-box count <= lights added,
  *    indices ascending, in-box ones also near; 0 before the first fill and after a
  *    failed one; a sphere whose (long double) distance to the box, resp. the box grown
@@ -483,6 +485,37 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         FUZZ_CHECK(shl_grid_interp(grid, method, b, np, clamped, outc, 1) == SHL_OK, "interp clamped");
         FUZZ_CHECK(memcmp(out, outc, ob) == 0, "outside point differs from the clamped point (method %d)", method);
+        { /* shl_grid_interp_f: its error codes (double grid; Taylor and Hermite spacings outside [2^-100, 2^127];
+           * points beyond float range), nothing written on error, else within its bound (global M, at least
+           * every cell's) of shl_grid_interp at the same float points */
+            float ptf[3 * MAXPTS + 3];
+            double ptd[3 * MAXPTS + 3], hmax = 0.0;
+            for (int k = 0; k < 3 * np; ++k) ptd[k] = ptf[k] = (float)pts[k];
+            int want = storage == SHL_GRID_DOUBLE ? SHL_EDOMAIN : SHL_OK;
+            for (int a = 0; a < 3; ++a) {
+                const double h = (hi[a] - lo[a]) / (res[a] - 1);
+                hmax = fmax(hmax, h);
+                if (want == SHL_OK && method != SHL_INTERP_TRILINEAR && !(h >= 0x1p-100 && h <= 0x1p127)) want = SHL_EDOMAIN;
+            }
+            if (want == SHL_OK && !all_finite_d(ptd, 3 * np)) want = SHL_ENONFINITE;
+            const size_t fb = sizeof(float) * nv * np;
+            float *outf = fz_guarded(fb);
+            const int sf = shl_grid_interp_f(grid, method, b, np, ptf, outf, 1 + (mb & 1));
+            FUZZ_CHECK(sf == want, "interp_f %d, want %d (method %d, storage %d)", sf, want, method, storage);
+            if (sf != SHL_OK) FUZZ_CHECK(fz_untouched(outf, fb), "interp_f wrote on error");
+            if (sf == SHL_OK) {
+                FUZZ_CHECK(shl_grid_interp(grid, method, b, np, ptd, out2, 1) == SHL_OK, "interp at the float points");
+                const double u = 0x1p-24, n = method == SHL_INTERP_TRILINEAR ? 9.0 : 18.0;
+                const double L = method == SHL_INTERP_TRILINEAR ? 1.0 : method == SHL_INTERP_TAYLOR ? 4.0 : 1.75;
+                const double M = method == SHL_INTERP_TRILINEAR ? vmax : fmax(vmax, gmax * hmax);
+                const double bound = n * u / (1.0 - n * u) * L * M + (16.0 * DBL_EPSILON + 0x1p-45) * M + 0x1p-144;
+                if (L * M * (1.0 + 2.0 * n * u) <= FLT_MAX)
+                    for (int k = 0; k < nv * np; ++k)
+                        FUZZ_CHECK(fabs(outf[k] - out2[k]) <= bound, "interp_f entry %d: %.9g, double %.17g, bound %.3g (method %d)",
+                                   k, outf[k], out2[k], bound, method);
+            }
+            free(outf);
+        }
         for (int p = 0; p < np; ++p) {
             const double *o = out + (size_t)nv * p;
             if (method == SHL_INTERP_TRILINEAR)
