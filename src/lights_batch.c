@@ -11,6 +11,7 @@
  * count.  The double batch shl_lights_eval_batch is here too. */
 #include "lights.h"
 #include "parallel.h"
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -79,6 +80,26 @@ static void add_point(const shl_ctx *ctx, const double rgb3[3], const float *uni
     }
 }
 
+/* shl__light_front_distance(li, v0, x) > 0, decided by the unscaled sum where it can:
+ * d = sum_k n_k (x_k - v0_k) over the same rounded differences as the scaled sum there
+ * (that times 2^-e).  Each errs from the exact sum over those differences by at most
+ * 3 eps S, S = sum_k |n_k (x_k - v0_k)|, plus underflows below 2^-1070 (1 + |n|) |x - v0|
+ * (below 2^-800 when |n|, |x - v0| < 2^100), so |d| > 8 eps S + 2^-800 gives both the
+ * exact sum's sign; otherwise (near the plane, extreme ranges, x = v0) the scaled test. */
+static int in_front(const shl__light *li, const double *v0, const float *pt)
+{
+    const double x[3] = {pt[0], pt[1], pt[2]};
+    double d = 0.0, s = 0.0, size = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double diff = x[k] - v0[k], t = li->normal[k] * diff;
+        d += t;
+        s += fabs(t);
+        size += fabs(diff) + fabs(li->normal[k]);
+    }
+    if (size < 0x1p100 && fabs(d) > 8.0 * DBL_EPSILON * s + 0x1p-800) return d > 0.0;
+    return shl__light_front_distance(li, v0, x) > 0.0;
+}
+
 /* The block's outputs zeroed, once (*zeroed). */
 static void zero_outputs(int m, size_t nc, float *rgb, size_t rgb_stride, float *grad, size_t grad_stride, int *zeroed)
 {
@@ -115,8 +136,7 @@ void shl__lights_batch_f_block(const shl_ctx *ctx, const shl_lights *lights, int
             const float *pt = pts + 3 * (size_t)j;
             keep[j] = 1;
             if (!li->two_sided) {
-                const double x[3] = {pt[0], pt[1], pt[2]};
-                keep[j] = shl__light_front_distance(li, v, x) > 0.0;
+                keep[j] = in_front(li, v, pt);
                 if (!keep[j]) continue;
             }
             memcpy(gathered + 3 * k, pt, sizeof(float) * 3);
