@@ -38,6 +38,18 @@ typedef struct {
  * redo[0..] (room for npts). */
 typedef int (*shl__poly_batch_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts, float *coeffs,
                                   float *grad, void *work, int *redo);
+/* As shl__poly_batch_fn for a light set's polygon (simd/poly_batch.h): the points p
+ * with keep[p] (NULL: all) of a block of npts, their results times rgb[c] added in
+ * the lobe domain to acc (poly_acc_floats(lmax, with_grad, npts) floats, zeroed
+ * before the block's first light); redo points get nothing (the caller adds their
+ * scalar-path results).  poly_acc_finish adds the block's reconstructed results to
+ * its outputs (add), or stores them (layout of shl__lights_batch_f_block; grad
+ * NULL: without gradients). */
+typedef int (*shl__poly_batch_acc_fn)(const shl__batch_poly *poly, int lmax, int npts, const float *pts,
+                                      const unsigned char *keep, const float rgb[3], int with_grad, float *acc,
+                                      void *work, int *redo);
+typedef void (*shl__poly_acc_finish_fn)(int lmax, int npts, const float *acc, int add, float *rgb, size_t rgb_stride,
+                                        float *grad, size_t grad_stride, void *work);
 
 /* Grid interpolation at one point (src/interp.c): the 8 corners of its cell
  * and the weights of the three methods, set up in double. */
@@ -178,6 +190,9 @@ struct shl__isa {
     const char *name;  /* as in simd/isa_list.h: "scalar", "avx2", "neon" */
     size_t (*poly_work_bytes)(int lmax, int with_grad);
     shl__poly_batch_fn poly_batch;
+    size_t (*poly_acc_floats)(int lmax, int with_grad, int npts);
+    shl__poly_batch_acc_fn poly_batch_acc;
+    shl__poly_acc_finish_fn poly_acc_finish;
     size_t (*sphere_work_bytes)(int lmax, int with_grad);
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
@@ -205,6 +220,12 @@ void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp
     size_t shl__poly_work_bytes_##isa(int lmax, int with_grad);                                        \
     int shl__poly_batch_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,       \
                               float *coeffs, float *grad, void *work, int *redo);                      \
+    size_t shl__poly_acc_floats_##isa(int lmax, int with_grad, int npts);                              \
+    int shl__poly_batch_acc_##isa(const shl__batch_poly *poly, int lmax, int npts, const float *pts,   \
+                                  const unsigned char *keep, const float rgb[3], int with_grad, float *acc, \
+                                  void *work, int *redo);                                              \
+    void shl__poly_acc_finish_##isa(int lmax, int npts, const float *acc, int add, float *rgb,         \
+                                    size_t rgb_stride, float *grad, size_t grad_stride, void *work);   \
     size_t shl__sphere_work_bytes_##isa(int lmax, int with_grad);                                      \
     void shl__sphere_batch_##isa(int lmax, const double center[3], double radius, int npts, const float *pts, \
                                  float *coeffs, float *grad, void *work);                              \

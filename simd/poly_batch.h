@@ -144,24 +144,27 @@ static inline void vdl_store_float(float *p, vdl a)
 /* Lanes of a block, in double: the scaled point (stored relative to v_0, as are P->v and
  * P->proxy: a polygon far from the origin stays within float range), the plane test of
  * shl_polygon_f (polygon.c, shl__poly_geom_init; squared form), and h = normal . (v_0 - x).
- * Lanes past nvalid, in the plane, or farther than 2^40 extents from the polygon
- * (products of three distances must stay in float range) evaluate the proxy
- * point with valid = 0.  (A valid point is at least 2^-50 extents from every
- * vertex, its height; the rmin2 test only guards that bound.)
- * Also the points the float geometry cannot resolve (the test and its error
+ * Lanes past nvalid, not kept (keep[j] = 0; keep NULL keeps all), in the plane, or
+ * farther than 2^40 extents from the polygon (products of three distances must stay
+ * in float range) evaluate the proxy point with valid = 0.  (A valid point is at
+ * least 2^-50 extents from every vertex, its height; the rmin2 test only guards that
+ * bound.)  Also the points the float geometry cannot resolve (the test and its error
  * analysis: shl__batch_poly_eval, src/batch.c): their indices p0 + j go to redo;
- * returns their number. */
-static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, work_t *w, int p0, int *redo)
+ * returns their number.  to_acc: those get valid = 0 too (the caller adds their
+ * scalar-path results). */
+static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, const unsigned char *keep, int to_acc,
+                       work_t *w, int p0, int *redo)
 {
     const double tol = 8.0 * DBL_EPSILON, pp = P->perimeter * P->perimeter * 0x1p10;
     const double hp = -(P->normal[0] * P->proxy[0] + P->normal[1] * P->proxy[1] + P->normal[2] * P->proxy[2]);
     int count = 0;
     for (int j0 = 0; j0 < VL; j0 += VD) {
         double xs[3][VD], ls[VD];
-        for (int j = 0; j < VD; ++j) { /* lanes past nvalid repeat point 0 (finite; masked below) */
-            const float *pt = pts + 3 * (j0 + j < nvalid ? j0 + j : 0);
+        for (int j = 0; j < VD; ++j) { /* lanes past nvalid or not kept repeat point 0 (finite; masked below) */
+            const int in = j0 + j < nvalid && (!keep || keep[j0 + j]);
+            const float *pt = pts + 3 * (in ? j0 + j : 0);
             for (int k = 0; k < 3; ++k) xs[k][j] = pt[k] * P->inv_scale;
-            ls[j] = j0 + j;
+            ls[j] = in ? j0 + j : VL;
         }
         /* whole-vector loads: element-wise insertion made gcc emit the register form of
          * VEX vmovq (0xD6), which valgrind 3.19 (make test-valgrind) cannot decode */
@@ -187,7 +190,8 @@ static int lanes_setup(const shl__batch_poly *P, const float *pts, int nvalid, w
         for (int k = 0; k < 3; ++k) /* relative to v_0, as P->v (float range) */
             vdl_store_float(w->lane + k * VL + j0, vdl_sel(ok, x[k] - vdl_set1(P->vd[0][k]), vdl_set1(P->proxy[k])));
         vdl_store_float(w->lane + 3 * VL + j0, vdl_sel(ok, h, vdl_set1(hp)));
-        vdl_store_float(w->lane + 4 * VL + j0, vdl_sel(ok, vdl_set1(1.0), vdl_set1(0.0)));
+        const vml used = to_acc ? ok & ~unres : ok; /* accumulated lanes: the scalar path adds the unresolved ones */
+        vdl_store_float(w->lane + 4 * VL + j0, vdl_sel(used, vdl_set1(1.0), vdl_set1(0.0)));
         for (int j = 0; j < VD; ++j)
             if (unres[j]) redo[count++] = p0 + j0 + j;
     }
@@ -584,8 +588,44 @@ static void store_rows(const float *soa, int nrows, float *out, size_t stride, i
         for (int j = 0; j < nvalid; ++j) out[j * stride + k] = soa[(size_t)k * VL + j];
 }
 
+/* Light sets (src/lights_batch.c): the ZH -> SH reconstruction is linear, so the
+ * lights' paired sums u and differences v (times each light's rgb) are accumulated
+ * per group of VL points and colour, and reconstructed once per block (as
+ * shl__lights_eval does in double).  Compact layout per group, colour and quantity
+ * q: u_k(l) at l(l+1)/2 + k (0 <= k <= l), v_k(l) at L(L+1)/2 + l(l-1)/2 + k - 1
+ * (1 <= k <= l): nc vectors. */
+static ALWAYS_INLINE size_t acc_u(int l, int k) { return (size_t)(l * (l + 1) / 2 + k); }
+static ALWAYS_INLINE size_t acc_v(int L, int l, int k) { return (size_t)(L * (L + 1) / 2 + l * (l - 1) / 2 + k - 1); }
+
+size_t ISA(shl__poly_acc_floats)(int lmax, int with_grad, int npts)
+{
+    const size_t nc = SHL_NCOEFFS(lmax), nq = with_grad ? 4 : 1, groups = ((size_t)npts + VL - 1) / VL;
+    return (3 * groups + 1) * nq * nc * VL; /* + one group's rows, point by point (acc_finish) */
+}
+
+/* acc[c] += s[c] (u, v) of the light just evaluated (w->u, w->v), one group. */
+static ALWAYS_INLINE void acc_light(const work_t *w, int lmax, const vf s[3], float *acc, const int nq)
+{
+    const int L = lmax + 1, nc = L * L;
+    for (int q = 0; q < nq; ++q)
+        for (int l = 0; l <= lmax; ++l)
+            for (int k = 0; k <= l; ++k) {
+                const vf u = vf_load(w->u + (((size_t)q * L + k) * L + l) * VL);
+                const vf v = k ? vf_load(w->v + (((size_t)q * L + k) * L + l) * VL) : u;
+                for (int c = 0; c < 3; ++c) {
+                    float *a = acc + ((size_t)(c * nq + q) * nc + acc_u(l, k)) * VL;
+                    vf_store(a, vf_fma(s[c], u, vf_load(a)));
+                    if (k) {
+                        float *b = acc + ((size_t)(c * nq + q) * nc + acc_v(L, l, k)) * VL;
+                        vf_store(b, vf_fma(s[c], v, vf_load(b)));
+                    }
+                }
+            }
+}
+
 static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
-                                         float *coeffs, float *grad, void *work, int *redo, const int with_grad)
+                                         const unsigned char *keep, const float *rgb, float *coeffs, float *grad,
+                                         void *work, int *redo, const int with_grad, const int to_acc)
 {
     int nredo = 0;
     const int L = lmax + 1, nc = L * L, nq = with_grad ? 4 : 1;
@@ -606,9 +646,16 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
      * after the reconstruction, so a product overflows only if the final gradient does */
     const float gs0 = (float)(P->inv_scale < 0x1p126 ? P->inv_scale : 0x1p126);
     const float gs1 = (float)(P->inv_scale / gs0);
+    vf s[3]; /* to_acc: the light's rgb; gradients times gs1 (1 for the lights' polygons) */
+    for (int c = 0; to_acc && c < 3; ++c) s[c] = vf_set1(rgb[c]);
     for (int p0 = 0; p0 < npts; p0 += VL) {
         const int nvalid = npts - p0 < VL ? npts - p0 : VL;
-        nredo += lanes_setup(P, pts + 3 * (size_t)p0, nvalid, &w, p0, redo + nredo);
+        if (keep) {
+            int any = 0;
+            for (int j = 0; j < nvalid; ++j) any |= keep[p0 + j];
+            if (!any) continue;
+        }
+        nredo += lanes_setup(P, pts + 3 * (size_t)p0, nvalid, keep ? keep + p0 : NULL, to_acc, &w, p0, redo + nredo);
         const vf omega = geometry(P, &w, with_grad);
         /* result = sign(S_0) * (input-order result); masked lanes get 0 */
         const vf fs = vf_mulsign(vf_load(w.lane + 4 * VL), omega);
@@ -616,6 +663,16 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
         lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad);
         for (int k = 1; k <= lmax; ++k) /* lobe pairs (2k-1, 2k), mirror images in y */
             lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad);
+        if (to_acc) {
+            float *a = coeffs + (size_t)p0 / VL * 3 * nq * nc * VL;
+            if (gs1 != 1.0f)
+                for (size_t r = (size_t)L * L; r < (size_t)nq * L * L; ++r) {
+                    vf_store(w.u + r * VL, vf_mul(vf_load(w.u + r * VL), vf_set1(gs1)));
+                    vf_store(w.v + r * VL, vf_mul(vf_load(w.v + r * VL), vf_set1(gs1)));
+                }
+            acc_light(&w, lmax, s, a, nq);
+            continue;
+        }
         reconstruct(&w, lmax, with_grad ? 4 : 1);
         for (size_t r = nc; gs1 != 1.0f && r < (size_t)nq * nc; ++r)
             vf_store(w.soa + r * VL, vf_mul(vf_load(w.soa + r * VL), vf_set1(gs1)));
@@ -628,6 +685,57 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
 int ISA(shl__poly_batch)(const shl__batch_poly *P, int lmax, int npts, const float *pts, float *coeffs, float *grad,
                          void *work, int *redo)
 {
-    if (grad) return poly_batch_impl(P, lmax, npts, pts, coeffs, grad, work, redo, 1);
-    return poly_batch_impl(P, lmax, npts, pts, coeffs, NULL, work, redo, 0);
+    if (grad) return poly_batch_impl(P, lmax, npts, pts, NULL, NULL, coeffs, grad, work, redo, 1, 0);
+    return poly_batch_impl(P, lmax, npts, pts, NULL, NULL, coeffs, NULL, work, redo, 0, 0);
+}
+
+int ISA(shl__poly_batch_acc)(const shl__batch_poly *P, int lmax, int npts, const float *pts, const unsigned char *keep,
+                             const float rgb[3], int with_grad, float *acc, void *work, int *redo)
+{
+    if (with_grad) return poly_batch_impl(P, lmax, npts, pts, keep, rgb, acc, NULL, work, redo, 1, 1);
+    return poly_batch_impl(P, lmax, npts, pts, keep, rgb, acc, NULL, work, redo, 0, 1);
+}
+
+/* y[k] += x[k], k < n (= y + 1 x, as shl__accumulate). */
+static void add_row(const float *x, float *y, int n)
+{
+    int k = 0;
+    for (; k + VL <= n; k += VL) vf_store(y + k, vf_add(vf_load(y + k), vf_load(x + k)));
+    for (; k < n; ++k) y[k] += x[k];
+}
+
+/* The accumulated groups of npts points reconstructed (Wang 2018 Eq. 33) into
+ * rgb[j rgb_stride + c nc + k] and grad[j grad_stride + (3c + a) nc + k]: added to
+ * them (add), else stored. */
+void ISA(shl__poly_acc_finish)(int lmax, int npts, const float *acc, int add, float *rgb, size_t rgb_stride,
+                               float *grad, size_t grad_stride, void *work)
+{
+    const int L = lmax + 1, nc = L * L, nq = grad ? 4 : 1;
+    work_t w;
+    work_floats(lmax, nq, &w, (float *)(((uintptr_t)work + 63) & ~(uintptr_t)63));
+    float *rows = (float *)acc + ISA(shl__poly_acc_floats)(lmax, grad != NULL, npts) - (size_t)nq * nc * VL;
+    for (int p0 = 0; p0 < npts; p0 += VL) {
+        const int nvalid = npts - p0 < VL ? npts - p0 : VL;
+        float *y = rgb + (size_t)p0 * rgb_stride, *g = grad ? grad + (size_t)p0 * grad_stride : NULL;
+        for (int c = 0; c < 3; ++c) {
+            const float *a = acc + ((size_t)p0 / VL * 3 + c) * nq * nc * VL;
+            for (int q = 0; q < nq; ++q, a += (size_t)nc * VL)
+                for (int l = 0; l <= lmax; ++l)
+                    for (int k = 0; k <= l; ++k) {
+                        vf_store(w.u + (((size_t)q * L + k) * L + l) * VL, vf_load(a + acc_u(l, k) * VL));
+                        if (k) vf_store(w.v + (((size_t)q * L + k) * L + l) * VL, vf_load(a + acc_v(L, l, k) * VL));
+                    }
+            reconstruct(&w, lmax, nq);
+            if (!add) {
+                store_rows(w.soa, nc, y + (size_t)c * nc, rgb_stride, nvalid);
+                if (g) store_rows(w.soa + (size_t)nc * VL, 3 * nc, g + (size_t)c * 3 * nc, grad_stride, nvalid);
+                continue;
+            }
+            store_rows(w.soa, nq * nc, rows, (size_t)nq * nc, nvalid);
+            for (int j = 0; j < nvalid; ++j) {
+                add_row(rows + (size_t)j * nq * nc, y + (size_t)j * rgb_stride + (size_t)c * nc, nc);
+                if (g) add_row(rows + (size_t)j * nq * nc + nc, g + (size_t)j * grad_stride + (size_t)c * 3 * nc, 3 * nc);
+            }
+        }
+    }
 }

@@ -1,16 +1,19 @@
 /* Light sets at many shading points in float, through the SIMD kernels: for
- * each light, the points it reaches are gathered (a one-sided polygon reaches
- * the points in front of it, by the double test of shl_lights_eval), run through
- * the polygon or sphere batch kernel (simd/kernel_api.h), and added, times the
- * light's rgb, into their outputs.  The ZH -> SH reconstruction is not shared
- * across lights as in shl__lights_eval: in the kernel it is 13% of the time at
- * lmax 8 (bench/RESULTS.md sec. 4), the per-light SH accumulation it would
- * replace costs about as much as the lobe-domain one.  Threads take whole
- * blocks of SHL__LIGHTS_BLOCK points, so a point's result never depends on the
- * thread count.  The double batch shl_lights_eval_batch is here too. */
+ * each light, the points it reaches (a one-sided polygon reaches the points in
+ * front of it, by the double test of shl_lights_eval) are run through the
+ * polygon or sphere batch kernel (simd/kernel_api.h).  In sets of 4 lights or
+ * more, polygons add their lobe integrals times the light's rgb to per-block
+ * accumulators, reconstructed once per block and colour (Wang 2018 Eq. 33 is
+ * linear; as shl__lights_eval); the others (spheres, polygons or points the
+ * kernel does not take, every light of smaller sets) add their SH results,
+ * times the rgb, into the outputs.  Threads take whole blocks of
+ * SHL__LIGHTS_BLOCK points, so a point's result never depends on the thread
+ * count.  The double batch shl_lights_eval_batch is here too. */
 #include "lights.h"
 #include "parallel.h"
+#include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 enum { CHUNK = SHL__LIGHTS_BLOCK }; /* points per pass over the lights */
@@ -59,44 +62,113 @@ static size_t kernel_bytes(const shl_ctx *ctx, int with_grad)
 size_t shl__lights_batch_f_bytes(const shl_ctx *ctx, const shl_lights *lights, int with_grad)
 {
     if (lights->count == 0) return 0;
-    const size_t nq = with_grad ? 4 : 1; /* kernel workspace, then the block's unit-radiance outputs and gathered points */
-    return kernel_bytes(ctx, with_grad) + sizeof(float) * (nq * (size_t)ctx->nc + 3) * CHUNK;
+    /* kernel workspace, the block's unit-radiance outputs and gathered points, then (64-byte aligned) the accumulators */
+    const size_t nq = with_grad ? 4 : 1;
+    return kernel_bytes(ctx, with_grad) + sizeof(float) * (nq * (size_t)ctx->nc + 3) * CHUNK + 64 +
+           sizeof(float) * ctx->isa->poly_acc_floats(ctx->lmax, with_grad, CHUNK);
+}
+
+/* out += rgb3[c] times the unit-radiance results of one point, for each colour c. */
+static void add_point(const shl_ctx *ctx, const double rgb3[3], const float *unit, const float *ugrad, float *rgb,
+                      float *grad)
+{
+    const size_t nc = (size_t)ctx->nc;
+    for (int c = 0; c < 3; ++c) { /* Wu 2020 Alg. 1 line 7: the lights add linearly */
+        const float s = (float)rgb3[c];
+        ctx->isa->accumulate(nc, s, unit, rgb + c * nc);
+        if (grad) ctx->isa->accumulate(3 * nc, s, ugrad, grad + 3 * c * nc); /* layout (c*3 + a)*nc + k */
+    }
+}
+
+/* shl__light_front_distance(li, v0, x) > 0, decided by the unscaled sum where it can:
+ * d = sum_k n_k (x_k - v0_k) over the same rounded differences as the scaled sum there
+ * (that times 2^-e).  Each errs from the exact sum over those differences by at most
+ * 3 eps S, S = sum_k |n_k (x_k - v0_k)|, plus underflows below 2^-1070 (1 + |n|) |x - v0|
+ * (below 2^-800 when |n|, |x - v0| < 2^100), so |d| > 8 eps S + 2^-800 gives both the
+ * exact sum's sign; otherwise (near the plane, extreme ranges, x = v0) the scaled test. */
+static int in_front(const shl__light *li, const double *v0, const float *pt)
+{
+    const double x[3] = {pt[0], pt[1], pt[2]};
+    double d = 0.0, s = 0.0, size = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double diff = x[k] - v0[k], t = li->normal[k] * diff;
+        d += t;
+        s += fabs(t);
+        size += fabs(diff) + fabs(li->normal[k]);
+    }
+    if (size < 0x1p100 && fabs(d) > 8.0 * DBL_EPSILON * s + 0x1p-800) return d > 0.0;
+    return shl__light_front_distance(li, v0, x) > 0.0;
+}
+
+/* The block's outputs zeroed, once (*zeroed). */
+static void zero_outputs(int m, size_t nc, float *rgb, size_t rgb_stride, float *grad, size_t grad_stride, int *zeroed)
+{
+    for (int j = 0; !*zeroed && j < m; ++j) {
+        memset(rgb + rgb_stride * j, 0, sizeof(float) * 3 * nc);
+        if (grad) memset(grad + grad_stride * j, 0, sizeof(float) * 9 * nc);
+    }
+    *zeroed = 1;
 }
 
 void shl__lights_batch_f_block(const shl_ctx *ctx, const shl_lights *lights, int m, const float *pts, float *rgb,
                                size_t rgb_stride, float *grad, size_t grad_stride, void *buf)
 {
     const size_t nc = (size_t)ctx->nc, nq = grad ? 4 : 1;
-    for (int j = 0; j < m; ++j) {
-        memset(rgb + rgb_stride * j, 0, sizeof(float) * 3 * nc);
-        if (grad) memset(grad + grad_stride * j, 0, sizeof(float) * 9 * nc);
+    int zeroed = 0; /* outputs zeroed: before the first light that adds to them directly */
+    if (lights->count == 0) {
+        zero_outputs(m, nc, rgb, rgb_stride, grad, grad_stride, &zeroed);
+        return;
     }
-    if (lights->count == 0) return;
     float *unit = (float *)((char *)buf + kernel_bytes(ctx, grad != NULL)), *gathered = unit + nq * nc * CHUNK;
     float *ugrad = grad ? unit + nc * CHUNK : NULL;
-    int index[CHUNK];
+    float *acc = (float *)(((uintptr_t)(gathered + 3 * CHUNK) + 63) & ~(uintptr_t)63);
+    int index[CHUNK], redo[CHUNK];
+    unsigned char keep[CHUNK];
+    /* The 3 colours' reconstructions cost about one light's kernel (lmax 8, gradients, 512
+     * points: 1 light 0.41 -> 0.53 ms, 4 lights 1.31 -> 1.30 ms): smaller sets reconstruct per light. */
+    const int shared = lights->count >= 4;
+    if (shared) memset(acc, 0, sizeof(float) * ctx->isa->poly_acc_floats(ctx->lmax, grad != NULL, m));
     for (int i = 0; i < lights->count; ++i) {
         const shl__light *li = &lights->items[i];
+        const double *v = lights->verts + li->vofs;
         int k = 0;
         for (int j = 0; j < m; ++j) {
             const float *pt = pts + 3 * (size_t)j;
+            keep[j] = 1;
             if (!li->two_sided) {
-                const double x[3] = {pt[0], pt[1], pt[2]};
-                if (!(shl__light_front_distance(li, lights->verts + li->vofs, x) > 0.0)) continue;
+                keep[j] = in_front(li, v, pt);
+                if (!keep[j]) continue;
             }
             memcpy(gathered + 3 * k, pt, sizeof(float) * 3);
             index[k++] = j;
         }
         if (k == 0) continue;
-        light_batch(ctx, lights, li, k, gathered, unit, ugrad, buf);
-        for (int j = 0; j < k; ++j) /* Wu 2020 Alg. 1 line 7: the lights add linearly */
-            for (int c = 0; c < 3; ++c) {
-                const float s = (float)li->rgb[c];
-                ctx->isa->accumulate(nc, s, unit + nc * j, rgb + rgb_stride * (size_t)index[j] + c * nc);
-                if (grad) /* layout (c*3 + a)*nc + k */
-                    ctx->isa->accumulate(3 * nc, s, ugrad + 3 * nc * j, grad + grad_stride * (size_t)index[j] + 3 * c * nc);
+        if (shared && li->kind == SHL__LIGHT_POLYGON && poly_kernel_range(v, li->n)) {
+            shl__batch_poly P;
+            shl__batch_poly_prepare(v, li->n, &P);
+            if (P.n > 0 && P.len2 >= 0x1p-120) { /* else shl__batch_poly_eval's own cases, through light_batch */
+                const float s[3] = {(float)li->rgb[0], (float)li->rgb[1], (float)li->rgb[2]};
+                const int nredo = ctx->isa->poly_batch_acc(&P, ctx->lmax, m, pts, k < m ? keep : NULL, s, grad != NULL,
+                                                           acc, buf, redo);
+                for (int r = 0; r < nredo; ++r) { /* the points the kernel's float geometry cannot resolve */
+                    const size_t p = (size_t)redo[r];
+                    zero_outputs(m, nc, rgb, rgb_stride, grad, grad_stride, &zeroed);
+                    shl__batch_poly_point(ctx, v, li->n, pts + 3 * p, unit, ugrad);
+                    add_point(ctx, li->rgb, unit, ugrad, rgb + rgb_stride * p, grad ? grad + grad_stride * p : NULL);
+                }
+                continue;
             }
+        }
+        light_batch(ctx, lights, li, k, gathered, unit, ugrad, buf);
+        zero_outputs(m, nc, rgb, rgb_stride, grad, grad_stride, &zeroed);
+        for (int j = 0; j < k; ++j)
+            add_point(ctx, li->rgb, unit + nc * j, grad ? ugrad + 3 * nc * j : NULL, rgb + rgb_stride * (size_t)index[j],
+                      grad ? grad + grad_stride * (size_t)index[j] : NULL);
     }
+    if (shared)
+        ctx->isa->poly_acc_finish(ctx->lmax, m, acc, zeroed, rgb, rgb_stride, grad, grad_stride, buf);
+    else /* no light reached the block: zeros */
+        zero_outputs(m, nc, rgb, rgb_stride, grad, grad_stride, &zeroed);
 }
 
 typedef struct {
