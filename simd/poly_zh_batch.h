@@ -407,19 +407,26 @@ __attribute__((always_inline)) static inline void sh_matvec(const double *wt, in
             acc0 += zv_load(wt + (ptrdiff_t)k * padded + r) * x;
             acc1 += zv_load(wt + (ptrdiff_t)k * padded + r + ZW) * x;
         }
-        /* lane reads, not a memcpy: with one gcc 12 kept the sums in memory */
+        /* lane reads at constant indices, not a memcpy or a variable index: through memory gcc
+         * stored the sums and loaded them back in pieces (store-forwarding stalls) */
+#pragma GCC unroll 8
         for (int j = 0; j < ZW; ++j) out[at + step * (r + j)] = acc0[j];
-        for (int j = 0; j < ZW && r + ZW + j < rows; ++j) out[at + step * (r + ZW + j)] = acc1[j];
+#pragma GCC unroll 8
+        for (int j = 0; j < ZW; ++j)
+            if (r + ZW + j < rows) out[at + step * (r + ZW + j)] = acc1[j];
     }
     for (; r + ZW <= padded; r += ZW) {
         zv acc = zv_set1(0.0);
         for (int k = 0; k < cols; ++k) acc += zv_load(wt + (ptrdiff_t)k * padded + r) * zv_set1(in[k]);
-        for (int j = 0; j < ZW && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+#pragma GCC unroll 8
+        for (int j = 0; j < ZW; ++j)
+            if (r + j < rows) out[at + step * (r + j)] = acc[j];
     }
     for (; r < padded; r += 2) { /* ZW > 2 only */
         dv2 acc = dv2_set1(0.0);
         for (int k = 0; k < cols; ++k) acc += dv2_load(wt + (ptrdiff_t)k * padded + r) * dv2_set1(in[k]);
-        for (int j = 0; j < 2 && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+        out[at + step * r] = acc[0];
+        if (r + 1 < rows) out[at + step * (r + 1)] = acc[1];
     }
 }
 
