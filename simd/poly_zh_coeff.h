@@ -65,13 +65,13 @@ __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom 
 /* Lobes d0 .. d0 + cnt - 1 (cnt <= CW; spare lanes repeat the last lobe) into zh. */
 static void cv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const shl__zh_band_consts *bc, double *zh)
 {
-    double t[3][CW];
-    for (int k = 0; k < CW; ++k)
-        for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)][c];
-    cv ux, uy, uz, bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1];
-    memcpy(&ux, t[0], sizeof ux);
-    memcpy(&uy, t[1], sizeof uy);
-    memcpy(&uz, t[2], sizeof uz);
+    cv ux = cv_set1(0.0), uy = ux, uz = ux, bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1];
+    /* lanes set in registers (scalar stores reloaded as a vector stall store forwarding) */
+#pragma GCC unroll 8
+    for (int k = 0; k < CW; ++k) {
+        const double *u = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)];
+        ux[k] = u[0], uy[k] = u[1], uz[k] = u[2];
+    }
     for (int l = 0; l <= lmax; ++l) bsum[l] = cv_set1(0.0);
     for (int e0 = 0; e0 < g->n;) { /* n >= 3: groups of 3, of 2 where 2 or 4 are left */
         const int rest = g->n - e0;
