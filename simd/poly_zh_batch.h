@@ -207,14 +207,15 @@ static void cv_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
         lv tb[SHL_LMAX_MAX]; /* c_e B_l, summed after the recurrence (lane reads of a fresh store would stall) */
         for (int l = 0; l < lmax; ++l) {
             if (l >= 2) {
+                const lv bl = lv_set1(bc->b_alpha[l]) * (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1) +
+                              lv_set1(bc->b_beta[l]) * b_lm2; /* Eq. 30-31 */
+                tb[l] = c * bl;
+                if (l + 1 == lmax) break; /* P_l, D_l, dP_l would feed band l + 1 only */
                 const lv pa = lv_set1(bc->leg_a[l]), pb = lv_set1(bc->leg_b[l]), tlm1 = lv_set1(bc->twol_m1[l]);
                 const lv pl = pa * a * p_lm1 - pb * p_lm2;                    /* Eq. 11 */
                 const lv dl = tlm1 * b_lm1 + d_lm2;                           /* Eq. 32 */
                 const lv dpl = pa * (af * dp_lm1 + da * p_lm1) - pb * dp_lm2; /* dP_l */
-                const lv bl = lv_set1(bc->b_alpha[l]) * (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1) +
-                              lv_set1(bc->b_beta[l]) * b_lm2; /* Eq. 30-31 */
                 b_lm2 = b_lm1, b_lm1 = bl;
-                tb[l] = c * bl;
                 p_lm2 = p_lm1, p_lm1 = pl;
                 dp_lm2 = dp_lm1, dp_lm1 = dpl;
                 d_lm2 = d_lm1, d_lm1 = dl;

@@ -42,7 +42,9 @@ __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom 
         bsum[0] += c[k] * gamma;
         if (lmax >= 2) bsum[1] += c[k] * b1[k];
     }
-    for (int l = 2; l < lmax; ++l) { /* B_l up to lmax-1 (Eq. 29) */
+    /* B_l up to lmax-1 (Eq. 29); the last band's B_l needs no P_l, D_l, dP_l (they would feed
+     * band l + 1 only): computed by the loop up to lmax - 2, then B_{lmax-1} alone */
+    for (int l = 2; l + 1 < lmax; ++l) {
         const cv pa = cv_set1(bc->leg_a[l]), pb = cv_set1(bc->leg_b[l]), tlm1 = cv_set1(bc->twol_m1[l]);
         const cv alpha = cv_set1(bc->b_alpha[l]), beta = cv_set1(bc->b_beta[l]);
 #pragma GCC unroll 3
@@ -59,6 +61,13 @@ __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom 
             dp_lm2[k] = dp_lm1[k], dp_lm1[k] = dpl;
             d_lm2[k] = d_lm1[k], d_lm1[k] = dl;
         }
+    }
+    if (lmax >= 3) {
+        const int l = lmax - 1;
+        const cv alpha = cv_set1(bc->b_alpha[l]), beta = cv_set1(bc->b_beta[l]);
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k)
+            bsum[l] += c[k] * (alpha * (b1[k] * p_lm1[k] + s[k] * dp_lm1[k] - c2[k] * d_lm1[k]) + beta * b_lm2[k]);
     }
 }
 
