@@ -359,14 +359,22 @@ void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax,
 }
 
 /* Coefficients only (shl_polygon): blocks of ZW lobes by simd/poly_zh_coeff.h (zh_lanes'
- * arithmetic per lane, edges side by side); a lone last lobe by cv_lobe above; another
- * partial last block of at most 4 lobes on 4-lane vectors, a fraction of a full-width
- * block's operations (AVX-512 runs lmax 5's 11 lobes as an 8-lane block and 3 of 4 lanes). */
+ * arithmetic per lane, edges side by side); a lone last lobe by cv_lobe above from lmax 4
+ * (below, building its 19 vectors of edge data lane by lane costs more than the few bands
+ * save: lmax 2 on AVX2, cv_lobe took 8.0% of the samples, the 2-lane block 5.4%); another
+ * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors, a fraction of a
+ * full-width block's operations (AVX-512 runs lmax 5's 11 lobes as an 8-lane block and 3
+ * of 4 lanes). */
 #define CW_BLOCK2(w) cv_block_##w
 #define CW_BLOCK(w) CW_BLOCK2(w) /* the coefficient block of width w (poly_zh_coeff.h) */
 #define CW ZW
 #include "poly_zh_coeff.h"
 #undef CW
+#if ZW > 2
+#define CW 2
+#include "poly_zh_coeff.h"
+#undef CW
+#endif
 #if ZW > 4
 #define CW 4
 #include "poly_zh_coeff.h"
@@ -384,9 +392,12 @@ void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, doub
     /* the partial block first: its few operations form a latency-bound chain, which the
      * out-of-order core overlaps with the full blocks issued after it */
     const int full = ndir - ndir % ZW, rest = ndir - full;
-    if (rest == 1) cv_lobe(g, lmax, full, bc, zh);
+    if (rest == 1 && lmax >= 4) cv_lobe(g, lmax, full, bc, zh);
+#if ZW > 2
+    else if (rest > 0 && rest <= 2) CW_BLOCK(2)(g, lmax, full, rest, bc, zh);
 #if ZW > 4
     else if (rest > 0 && rest <= 4) CW_BLOCK(4)(g, lmax, full, rest, bc, zh);
+#endif
 #endif
     else if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
     for (int d0 = 0; d0 < full; d0 += ZW) CW_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh);

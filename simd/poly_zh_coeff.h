@@ -1,6 +1,6 @@
 /* Coefficient-only ZH integrals (shl_polygon) for one block of CW lobes side by side,
  * CW doubles per vector; included by simd/poly_zh_batch.h once per width it uses
- * (its full width ZW, and 4 below that for a partial last block of lobes), with
+ * (its full width ZW, and 2 and 4 below that for a partial last block of lobes), with
  * CW defined.  Each lane does exactly the one-lobe arithmetic of poly_zh_batch.h's
  * zh_lanes (elementwise operations, no contraction), so the width changes no bit:
  * test_polygon's hard_extreme_scales compares shl_polygon with shl_polygon_grad.
