@@ -152,10 +152,6 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
     }
 }
 
-/* shl_polygon's lone lobe d, its edges side by side as in zh_lobe: lane k does edge e0 + k's
- * arithmetic of cv_edges (simd/poly_zh_coeff.h) operation for operation, and each bsum[l]
- * adds the edges' c_e B_l (Eq. 14) in edge order from 0 + the first, as cv_edges: cv_block's
- * bits, one chain of vector operations instead of a 2-lane block of copies of the lobe. */
 /* lanes p[k[0]], p[k[1]], ... (column c of rows k[0], ...), built in registers */
 #if LW == 4
 #define LV_LANES(x) (lv){x(0), x(1), x(2), x(3)}
@@ -174,7 +170,12 @@ static inline lv lv_col(const double (*p)[3], int c, const int *k)
     return LV_LANES(LV_AT);
 #undef LV_AT
 }
+#undef LV_LANES
 
+/* shl_polygon's lone lobe d, its edges side by side as in zh_lobe: lane k does edge e0 + k's
+ * arithmetic of cv_edges (simd/poly_zh_coeff.h) operation for operation, and each bsum[l]
+ * adds the edges' c_e B_l (Eq. 14) in edge order from 0 + the first, as cv_edges: cv_block's
+ * bits, one chain of vector operations instead of a 2-lane block of copies of the lobe. */
 static void cv_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band_consts *bc, double *zh)
 {
     const int n = g->n;
