@@ -151,6 +151,86 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
         for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = kl * o[1 + ax];
     }
 }
+
+/* lanes p[k[0]], p[k[1]], ... (column c of rows k[0], ...), built in registers */
+#if LW == 4
+#define LV_LANES(x) (lv){x(0), x(1), x(2), x(3)}
+#else
+#define LV_LANES(x) (lv){x(0), x(1)}
+#endif
+static inline lv lv_gather(const double *p, const int *k)
+{
+#define LV_AT(j) p[k[j]]
+    return LV_LANES(LV_AT);
+#undef LV_AT
+}
+static inline lv lv_col(const double (*p)[3], int c, const int *k)
+{
+#define LV_AT(j) p[k[j]][c]
+    return LV_LANES(LV_AT);
+#undef LV_AT
+}
+#undef LV_LANES
+
+/* shl_polygon's lone lobe d, its edges side by side as in zh_lobe: lane k does edge e0 + k's
+ * arithmetic of cv_edges (simd/poly_zh_coeff.h) operation for operation, and each bsum[l]
+ * adds the edges' c_e B_l (Eq. 14) in edge order from 0 + the first, as cv_edges: cv_block's
+ * bits, one chain of vector operations instead of a 2-lane block of copies of the lobe. */
+static void cv_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band_consts *bc, double *zh)
+{
+    const int n = g->n;
+    const lv ux = lv_set1(shl__zh_dir[d][0]), uy = lv_set1(shl__zh_dir[d][1]), uz = lv_set1(shl__zh_dir[d][2]);
+    double bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1];
+    for (int l = 0; l <= lmax; ++l) bsum[l] = 0.0;
+    for (int e0 = 0; e0 < n; e0 += LW) {
+        const int cnt = n - e0 < LW ? n - e0 : LW;
+        int ek[LW], fk[LW];
+        for (int k = 0; k < LW; ++k) {
+            ek[k] = e0 + (k < cnt ? k : cnt - 1);
+            fk[k] = ek[k] + 1 == n ? 0 : ek[k] + 1;
+        }
+        /* the lanes built in registers (scalar stores read back as a vector would stall) */
+        lv in[19]; /* w_e, lambda_e, mu_e, w_f, dw_e, 4 of gamma */
+        for (int c = 0; c < 3; ++c) {
+            in[c] = lv_col(g->w, c, ek), in[3 + c] = lv_col(g->lam, c, ek), in[6 + c] = lv_col(g->mu, c, ek);
+            in[9 + c] = lv_col(g->w, c, fk), in[12 + c] = lv_col(g->dw, c, ek);
+        }
+        in[15] = lv_gather(g->gamma, ek), in[16] = lv_gather(g->sin_gamma, ek);
+        in[17] = lv_gather(g->cos_gamma, ek), in[18] = lv_gather(g->omc_gamma, ek);
+        const lv gamma = in[15];
+        /* Eq. 20 */
+        const lv a = ux * in[0] + uy * in[1] + uz * in[2], b = ux * in[3] + uy * in[4] + uz * in[5];
+        const lv c = ux * in[6] + uy * in[7] + uz * in[8], af = ux * in[9] + uy * in[10] + uz * in[11];
+        const lv da = ux * in[12] + uy * in[13] + uz * in[14];
+        const lv c2 = c * c, s = a * in[16] - b * in[17], b1 = a * in[16] + b * in[18]; /* B_1, Eq. 27 */
+        lv p_lm1 = a, p_lm2 = lv_set1(1.0), dp_lm1 = da, dp_lm2 = lv_set1(0.0);
+        lv b_lm1 = b1, b_lm2 = gamma, d_lm1 = gamma, d_lm2 = lv_set1(0.0);
+        lv tb[SHL_LMAX_MAX]; /* c_e B_l, summed after the recurrence (lane reads of a fresh store would stall) */
+        for (int l = 0; l < lmax; ++l) {
+            if (l >= 2) {
+                const lv bl = lv_set1(bc->b_alpha[l]) * (b1 * p_lm1 + s * dp_lm1 - c2 * d_lm1) +
+                              lv_set1(bc->b_beta[l]) * b_lm2; /* Eq. 30-31 */
+                tb[l] = c * bl;
+                if (l + 1 == lmax) break; /* P_l, D_l, dP_l would feed band l + 1 only */
+                const lv pa = lv_set1(bc->leg_a[l]), pb = lv_set1(bc->leg_b[l]), tlm1 = lv_set1(bc->twol_m1[l]);
+                const lv pl = pa * a * p_lm1 - pb * p_lm2;                    /* Eq. 11 */
+                const lv dl = tlm1 * b_lm1 + d_lm2;                           /* Eq. 32 */
+                const lv dpl = pa * (af * dp_lm1 + da * p_lm1) - pb * dp_lm2; /* dP_l */
+                b_lm2 = b_lm1, b_lm1 = bl;
+                p_lm2 = p_lm1, p_lm1 = pl;
+                dp_lm2 = dp_lm1, dp_lm1 = dpl;
+                d_lm2 = d_lm1, d_lm1 = dl;
+            } else
+                tb[l] = c * (l ? b1 : gamma);
+        }
+        for (int l = 0; l < lmax; ++l)
+            for (int k = 0; k < cnt; ++k) bsum[l] += tb[l][k]; /* edges in order */
+    }
+    surf[0] = g->solid_angle; /* S_0 */
+    if (lmax >= 1) surf[1] = bsum[0] * 0.5; /* S_1, Eq. 25 */
+    for (int l = 2; l <= lmax; ++l) surf[l] = bc->s_b[l] * bsum[l - 1] + bc->s_s[l] * surf[l - 2]; /* Eq. 29 */
+    for (int l = 0; l <= lmax; ++l) zh[(ptrdiff_t)d * SHL__ZH_STRIDE + l] = bc->norm[l] * surf[l]; /* Eq. 13 */
+}
 #undef lv_load
 #undef lv_set1
 #undef lv
@@ -280,10 +360,12 @@ void SHL_ISA_SUFFIX(shl__poly_grad_sh)(const struct shl__poly_geom *g, int lmax,
 }
 
 /* Coefficients only (shl_polygon): blocks of ZW lobes by simd/poly_zh_coeff.h (zh_lanes'
- * arithmetic per lane, edges side by side); a partial last block of at most 2 or 4 lobes
- * on 2- or 4-lane vectors, which cost a fraction of a full-width block's operations
- * (lmax 8 has 17 lobes: AVX-512 runs 8 + 8 + 1 lobes as two 8-lane blocks and one 2-lane
- * block instead of three 8-lane blocks). */
+ * arithmetic per lane, edges side by side); a lone last lobe by cv_lobe above from lmax 4
+ * (below, building its 19 vectors of edge data lane by lane costs more than the few bands
+ * save: lmax 2 on AVX2, cv_lobe took 8.0% of the samples, the 2-lane block 5.4%); another
+ * partial last block of at most 2 or 4 lobes on 2- or 4-lane vectors, a fraction of a
+ * full-width block's operations (AVX-512 runs lmax 5's 11 lobes as an 8-lane block and 3
+ * of 4 lanes). */
 #define CW_BLOCK2(w) cv_block_##w
 #define CW_BLOCK(w) CW_BLOCK2(w) /* the coefficient block of width w (poly_zh_coeff.h) */
 #define CW ZW
@@ -311,14 +393,14 @@ void SHL_ISA_SUFFIX(shl__poly_zh)(const struct shl__poly_geom *g, int lmax, doub
     /* the partial block first: its few operations form a latency-bound chain, which the
      * out-of-order core overlaps with the full blocks issued after it */
     const int full = ndir - ndir % ZW, rest = ndir - full;
+    if (rest == 1 && lmax >= 4) cv_lobe(g, lmax, full, bc, zh);
 #if ZW > 2
-    if (rest > 0 && rest <= 2) CW_BLOCK(2)(g, lmax, full, rest, bc, zh);
+    else if (rest > 0 && rest <= 2) CW_BLOCK(2)(g, lmax, full, rest, bc, zh);
 #if ZW > 4
     else if (rest > 0 && rest <= 4) CW_BLOCK(4)(g, lmax, full, rest, bc, zh);
 #endif
-    else
 #endif
-    if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
+    else if (rest > 0) CW_BLOCK(ZW)(g, lmax, full, rest, bc, zh);
     for (int d0 = 0; d0 < full; d0 += ZW) CW_BLOCK(ZW)(g, lmax, d0, ZW, bc, zh);
 }
 
@@ -338,19 +420,26 @@ __attribute__((always_inline)) static inline void sh_matvec(const double *wt, in
             acc0 += zv_load(wt + (ptrdiff_t)k * padded + r) * x;
             acc1 += zv_load(wt + (ptrdiff_t)k * padded + r + ZW) * x;
         }
-        /* lane reads, not a memcpy: with one gcc 12 kept the sums in memory */
+        /* lane reads at constant indices, not a memcpy or a variable index: through memory gcc
+         * stored the sums and loaded them back in pieces (store-forwarding stalls) */
+#pragma GCC unroll 8
         for (int j = 0; j < ZW; ++j) out[at + step * (r + j)] = acc0[j];
-        for (int j = 0; j < ZW && r + ZW + j < rows; ++j) out[at + step * (r + ZW + j)] = acc1[j];
+#pragma GCC unroll 8
+        for (int j = 0; j < ZW; ++j)
+            if (r + ZW + j < rows) out[at + step * (r + ZW + j)] = acc1[j];
     }
     for (; r + ZW <= padded; r += ZW) {
         zv acc = zv_set1(0.0);
         for (int k = 0; k < cols; ++k) acc += zv_load(wt + (ptrdiff_t)k * padded + r) * zv_set1(in[k]);
-        for (int j = 0; j < ZW && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+#pragma GCC unroll 8
+        for (int j = 0; j < ZW; ++j)
+            if (r + j < rows) out[at + step * (r + j)] = acc[j];
     }
     for (; r < padded; r += 2) { /* ZW > 2 only */
         dv2 acc = dv2_set1(0.0);
         for (int k = 0; k < cols; ++k) acc += dv2_load(wt + (ptrdiff_t)k * padded + r) * dv2_set1(in[k]);
-        for (int j = 0; j < 2 && r + j < rows; ++j) out[at + step * (r + j)] = acc[j];
+        out[at + step * r] = acc[0];
+        if (r + 1 < rows) out[at + step * (r + 1)] = acc[1];
     }
 }
 
