@@ -281,105 +281,31 @@ typedef struct {
     const float *pts;
     float *out;
     int ahead; /* as interp_job */
+    shl__interp_geom geom; /* g's, for shl__interp_setup_ff */
 } interp_job_ff;
 
-/* Points per set-up block of shl_grid_interp_f: fixed-count loops across them,
- * which the compiler vectorizes. */
-enum { FF_BLOCK = 8 };
-
-/* The set-up of points p0 .. p0 + n - 1 (n <= FF_BLOCK) into sf[0 .. n - 1]:
- * per point the operations of locate, hermite_weights or trilinear_weights and
- * shl__hermite_row_weights (so the same double weights), here across the block
- * (lanes past n repeat point p0); weights rounded to float once.  Taylor (pow per
- * corner): point by point, setup_at. */
+/* The set-up of points p0 .. p0 + n - 1 (n <= SHL__INTERP_FF_BLOCK) into sf[0 .. n - 1]:
+ * trilinear and Hermite across the block by the context's kernel
+ * (simd/interp_batch.h, shl__interp_setup_ff); Taylor (pow per corner) point by
+ * point, setup_at; weights rounded to float once. */
 static void setup_block_ff(const interp_job_ff *job, long p0, int n, shl__interp_point_ff *sf)
 {
     const shl_grid *g = job->g;
     const float *pts = job->pts + 3 * p0;
-    if (job->method == SHL_INTERP_TAYLOR) {
-        for (int i = 0; i < n; ++i) {
-            const double x[3] = {pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]};
-            point_setup s;
-            setup_at(g, job->method, job->b, x, &s);
-            for (int j = 0; j < 8; ++j) {
-                sf[i].ofs[j] = s.ofs[j];
-                sf[i].w[j] = (float)s.w[j];
-                for (int a = 0; a < 3; ++a) sf[i].wd[j][a] = (float)s.wd[j][a];
-            }
-        }
+    if (job->method != SHL_INTERP_TAYLOR) {
+        g->isa->interp_setup_ff(&job->geom, job->method, n, pts, sf);
         return;
     }
-    double u[3][FF_BLOCK];
-    size_t base[FF_BLOCK] = {0};
-    for (int a = 0; a < 3; ++a) { /* locate */
-        const double lo = g->lo[a], hi = g->hi[a], h = g->h[a];
-        const int last = g->res[a] - 2;
-        const size_t stride = a == 0 ? g->node_len : a == 1 ? g->node_len * g->res[0]
-                                                              : g->node_len * g->res[0] * (size_t)g->res[1];
-        double x[FF_BLOCK];
-        for (int i = 0; i < FF_BLOCK; ++i) x[i] = pts[3 * (i < n ? i : 0) + a];
-        for (int i = 0; i < FF_BLOCK; ++i) {
-            const double c = x[i] < lo ? lo : x[i] > hi ? hi : x[i];
-            const double t = (c - lo) / h;
-            const int cell = t < last + 1 ? (int)t : last;
-            u[a][i] = t - cell < 1.0 ? t - cell : 1.0;
-            base[i] += (size_t)cell * stride;
-        }
-    }
-    size_t corner[8]; /* corner j's offset from corner 0 */
-    for (int j = 0; j < 8; ++j)
-        corner[j] = ((size_t)(j & 1) + (size_t)g->res[0] * ((size_t)((j >> 1) & 1) + (size_t)g->res[1] * (size_t)(j >> 2))) *
-                    g->node_len;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < 8; ++j) sf[i].ofs[j] = base[i] + corner[j];
-    if (job->method == SHL_INTERP_TRILINEAR) {
-        double vu[3][2][FF_BLOCK]; /* 1 - u, u */
-        for (int a = 0; a < 3; ++a)
-            for (int i = 0; i < FF_BLOCK; ++i) {
-                vu[a][0][i] = 1.0 - u[a][i];
-                vu[a][1][i] = u[a][i];
-            }
+    for (int i = 0; i < n; ++i) {
+        const double x[3] = {pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]};
+        point_setup s;
+        setup_at(g, job->method, job->b, x, &s);
         for (int j = 0; j < 8; ++j) {
-            const double *x = vu[0][j & 1], *y = vu[1][(j >> 1) & 1], *z = vu[2][j >> 2];
-            float w[FF_BLOCK];
-            for (int i = 0; i < FF_BLOCK; ++i) w[i] = (float)(x[i] * y[i] * z[i]);
-            for (int i = 0; i < n; ++i) sf[i].w[j] = w[i];
-        }
-        return;
-    }
-    double hw[3][4][FF_BLOCK]; /* hermite_weights */
-    for (int a = 0; a < 3; ++a)
-        for (int i = 0; i < FF_BLOCK; ++i) {
-            const double ua = u[a][i], v = 1.0 - ua;
-            hw[a][0][i] = (1.0 + 2.0 * ua) * v * v;
-            hw[a][1][i] = ua * v * v * g->h[a];
-            hw[a][2][i] = ua * ua * (3.0 - 2.0 * ua);
-            hw[a][3][i] = -ua * ua * v * g->h[a];
-        }
-    float w[8][FF_BLOCK], wd[8][3][FF_BLOCK]; /* shl__hermite_row_weights, rounded */
-    double vy[FF_BLOCK];
-    for (int i = 0; i < FF_BLOCK; ++i) vy[i] = 1.0 - u[1][i];
-    for (int q = 0; q < 4; ++q) { /* G[q] = z[q & 2] y[2 (q & 1)], Gy[q] = z[q & 2] y[2 (q & 1) + 1], Gz[q] = z[(q & 2) + 1] (vy or uy) */
-        const double *z = hw[2][q & 2], *zd = hw[2][(q & 2) + 1], *y = hw[1][2 * (q & 1)], *yd = hw[1][2 * (q & 1) + 1];
-        const double *yz = q & 1 ? u[1] : vy;
-        for (int i = 0; i < FF_BLOCK; ++i) {
-            const double ux = u[0][i], vx = 1.0 - ux, G = z[i] * y[i], Gy = z[i] * yd[i];
-            const double Gz = zd[i] * yz[i];
-            w[2 * q][i] = (float)(G * hw[0][0][i]);
-            wd[2 * q][0][i] = (float)(G * hw[0][1][i]);
-            wd[2 * q][1][i] = (float)(Gy * vx);
-            wd[2 * q][2][i] = (float)(Gz * vx);
-            w[2 * q + 1][i] = (float)(G * hw[0][2][i]);
-            wd[2 * q + 1][0][i] = (float)(G * hw[0][3][i]);
-            wd[2 * q + 1][1][i] = (float)(Gy * ux);
-            wd[2 * q + 1][2][i] = (float)(Gz * ux);
+            sf[i].ofs[j] = s.ofs[j];
+            sf[i].w[j] = (float)s.w[j];
+            for (int a = 0; a < 3; ++a) sf[i].wd[j][a] = (float)s.wd[j][a];
         }
     }
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < 8; ++j) {
-            sf[i].w[j] = w[j][i];
-            for (int a = 0; a < 3; ++a) sf[i].wd[j][a] = wd[j][a][i];
-        }
 }
 
 /* interp_range with float sums: set-ups a block ahead (the next block's made
@@ -389,18 +315,18 @@ static void interp_range_ff(void *arg, int worker, long begin, long end)
     const interp_job_ff *job = arg;
     const shl_grid *g = job->g;
     const size_t nv = 3 * (size_t)g->nc;
-    shl__interp_point_ff sf[2][FF_BLOCK];
+    shl__interp_point_ff sf[2][SHL__INTERP_FF_BLOCK];
     (void)worker;
-    if (begin < end) setup_block_ff(job, begin, end - begin < FF_BLOCK ? (int)(end - begin) : FF_BLOCK, sf[0]);
+    if (begin < end) setup_block_ff(job, begin, end - begin < SHL__INTERP_FF_BLOCK ? (int)(end - begin) : SHL__INTERP_FF_BLOCK, sf[0]);
     for (long p = begin; p < end; ++p) {
         const long k = p - begin, next = p + 1;
-        const shl__interp_point_ff *cur = &sf[(k / FF_BLOCK) & 1][k % FF_BLOCK];
+        const shl__interp_point_ff *cur = &sf[(k / SHL__INTERP_FF_BLOCK) & 1][k % SHL__INTERP_FF_BLOCK];
         shl__interp_ahead ahead = {.nrange = 0};
         if (next < end) {
             const long kn = next - begin;
-            if (kn % FF_BLOCK == 0)
-                setup_block_ff(job, next, end - next < FF_BLOCK ? (int)(end - next) : FF_BLOCK, sf[(kn / FF_BLOCK) & 1]);
-            if (job->ahead) ahead_rows(g, job->method, sf[(kn / FF_BLOCK) & 1][kn % FF_BLOCK].ofs, &ahead);
+            if (kn % SHL__INTERP_FF_BLOCK == 0)
+                setup_block_ff(job, next, end - next < SHL__INTERP_FF_BLOCK ? (int)(end - next) : SHL__INTERP_FF_BLOCK, sf[(kn / SHL__INTERP_FF_BLOCK) & 1]);
+            if (job->ahead) ahead_rows(g, job->method, sf[(kn / SHL__INTERP_FF_BLOCK) & 1][kn % SHL__INTERP_FF_BLOCK].ofs, &ahead);
         }
         g->isa->interp_ff(g->data, job->method, g->nc, cur, &ahead, job->out + nv * (size_t)p);
     }
@@ -422,7 +348,14 @@ int shl_grid_interp_f(const shl_grid *grid, int method, double taylor_b, int npt
     for (size_t i = 0; i < 3 * (size_t)npts; ++i)
         if (!isfinite(pts[i])) return SHL_ENONFINITE;
     interp_job_ff job = {grid, method, taylor_b, pts, rgb,
-                         grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES};
+                         grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES,
+                         {.node_len = grid->node_len}};
+    for (int a = 0; a < 3; ++a) {
+        job.geom.lo[a] = grid->lo[a];
+        job.geom.hi[a] = grid->hi[a];
+        job.geom.h[a] = grid->h[a];
+        job.geom.res[a] = grid->res[a];
+    }
     const int nw = shl__parallel_workers(npts, 256, nthreads); /* as grid_interp */
     return shl__parallel_for_guided(npts, 32, nw, interp_range_ff, &job);
 }
