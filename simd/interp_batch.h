@@ -261,6 +261,86 @@ void ISA(shl__interp_f)(const float *data, int method, int nc, const shl__interp
 }
 #endif
 
+/* ---- Float sums' set-up (shl__interp_setup_ff, simd/kernel_api.h) ----
+ * Per point the operations of src/interp.c's locate, hermite_weights or
+ * trilinear_weights and shl__hermite_row_weights, so the same double weights;
+ * here in fixed-count loops across SHL__INTERP_FF_BLOCK points (lanes past n
+ * repeat point 0), which the compiler vectorizes at this ISA's width. */
+void ISA(shl__interp_setup_ff)(const shl__interp_geom *g, int method, int n, const float *pts, shl__interp_point_ff *s)
+{
+    double u[3][SHL__INTERP_FF_BLOCK];
+    size_t base[SHL__INTERP_FF_BLOCK] = {0};
+    for (int a = 0; a < 3; ++a) { /* locate */
+        const double lo = g->lo[a], hi = g->hi[a], h = g->h[a];
+        const int last = g->res[a] - 2;
+        const size_t stride = a == 0 ? g->node_len : a == 1 ? g->node_len * g->res[0]
+                                                              : g->node_len * g->res[0] * (size_t)g->res[1];
+        double x[SHL__INTERP_FF_BLOCK];
+        for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) x[i] = pts[3 * (i < n ? i : 0) + a];
+        for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) {
+            const double c = x[i] < lo ? lo : x[i] > hi ? hi : x[i];
+            const double t = (c - lo) / h;
+            const int cell = t < last + 1 ? (int)t : last;
+            u[a][i] = t - cell < 1.0 ? t - cell : 1.0;
+            base[i] += (size_t)cell * stride;
+        }
+    }
+    size_t corner[8]; /* corner j's offset from corner 0 */
+    for (int j = 0; j < 8; ++j)
+        corner[j] = ((size_t)(j & 1) + (size_t)g->res[0] * ((size_t)((j >> 1) & 1) + (size_t)g->res[1] * (size_t)(j >> 2)))
+                    * g->node_len;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < 8; ++j) s[i].ofs[j] = base[i] + corner[j];
+    if (method == SHL_INTERP_TRILINEAR) {
+        double vu[3][2][SHL__INTERP_FF_BLOCK]; /* 1 - u, u */
+        for (int a = 0; a < 3; ++a)
+            for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) {
+                vu[a][0][i] = 1.0 - u[a][i];
+                vu[a][1][i] = u[a][i];
+            }
+        for (int j = 0; j < 8; ++j) {
+            const double *x = vu[0][j & 1], *y = vu[1][(j >> 1) & 1], *z = vu[2][j >> 2];
+            float w[SHL__INTERP_FF_BLOCK];
+            for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) w[i] = (float)(x[i] * y[i] * z[i]);
+            for (int i = 0; i < n; ++i) s[i].w[j] = w[i];
+        }
+        return;
+    }
+    double hw[3][4][SHL__INTERP_FF_BLOCK]; /* hermite_weights */
+    for (int a = 0; a < 3; ++a)
+        for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) {
+            const double ua = u[a][i], v = 1.0 - ua;
+            hw[a][0][i] = (1.0 + 2.0 * ua) * v * v;
+            hw[a][1][i] = ua * v * v * g->h[a];
+            hw[a][2][i] = ua * ua * (3.0 - 2.0 * ua);
+            hw[a][3][i] = -ua * ua * v * g->h[a];
+        }
+    float w[8][SHL__INTERP_FF_BLOCK], wd[8][3][SHL__INTERP_FF_BLOCK]; /* shl__hermite_row_weights, rounded */
+    double vy[SHL__INTERP_FF_BLOCK];
+    for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) vy[i] = 1.0 - u[1][i];
+    for (int q = 0; q < 4; ++q) { /* G[q] = z[q & 2] y[2 (q & 1)], Gy[q] = z[q & 2] y[2 (q & 1) + 1], Gz[q] = z[(q & 2) + 1] (vy or uy) */
+        const double *z = hw[2][q & 2], *zd = hw[2][(q & 2) + 1], *y = hw[1][2 * (q & 1)], *yd = hw[1][2 * (q & 1) + 1];
+        const double *yz = q & 1 ? u[1] : vy;
+        for (int i = 0; i < SHL__INTERP_FF_BLOCK; ++i) {
+            const double ux = u[0][i], vx = 1.0 - ux, G = z[i] * y[i], Gy = z[i] * yd[i];
+            const double Gz = zd[i] * yz[i];
+            w[2 * q][i] = (float)(G * hw[0][0][i]);
+            wd[2 * q][0][i] = (float)(G * hw[0][1][i]);
+            wd[2 * q][1][i] = (float)(Gy * vx);
+            wd[2 * q][2][i] = (float)(Gz * vx);
+            w[2 * q + 1][i] = (float)(G * hw[0][2][i]);
+            wd[2 * q + 1][0][i] = (float)(G * hw[0][3][i]);
+            wd[2 * q + 1][1][i] = (float)(Gy * ux);
+            wd[2 * q + 1][2][i] = (float)(Gz * ux);
+        }
+    }
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < 8; ++j) {
+            s[i].w[j] = w[j][i];
+            for (int a = 0; a < 3; ++a) s[i].wd[j][a] = wd[j][a][i];
+        }
+}
+
 /* ---- Float sums (shl_grid_interp_f) ----
  * The same across-coefficient layout with float lanes (SHL_VLEN per vector) and
  * the point's weights already rounded to float (shl__interp_point_ff): plain

@@ -120,8 +120,9 @@ typedef void (*shl__interp_fn)(const float *data, int method, int nc, const shl_
                                shl__interp_ahead *ahead, double *out);
 
 /* Float-output interpolation at one point (shl_grid_interp_f): every method as a
- * weighted sum of corner rows, weights formed in double by src/interp.c and
- * rounded to float.  Trilinear: out[i] = sum_j w_j f_j[i] over the 3 nc values;
+ * weighted sum of corner rows, weights formed in double (shl__interp_setup_ff;
+ * Taylor: src/interp.c) and rounded to float.  Trilinear: out[i] = sum_j w_j
+ * f_j[i] over the 3 nc values;
  * Taylor (Annen Eq. 15) and Hermite (Wu Alg. 4 multiplied out,
  * shl__hermite_row_weights): per channel c, out[c nc + k] = sum_j w_j v_j[k] +
  * wd_j . grad_j[k], summed as corners 0-3 plus corners 4-7 (README "Grid
@@ -136,6 +137,23 @@ typedef struct {
  * trilinear: method == SHL_INTERP_TRILINEAR (wd unused), else the gradient form. */
 typedef void (*shl__interp_ff_fn)(const float *data, int method, int nc, const shl__interp_point_ff *s,
                                   shl__interp_ahead *ahead, float *out);
+
+/* A grid's geometry (src/grid.h) for shl__interp_setup_ff. */
+typedef struct {
+    double lo[3], hi[3], h[3];
+    int res[3];
+    size_t node_len;
+} shl__interp_geom;
+
+/* Points per call of shl__interp_setup_ff. */
+enum { SHL__INTERP_FF_BLOCK = 8 };
+
+/* The set-up of n <= SHL__INTERP_FF_BLOCK points pts[3 i .. 3 i + 2] (finite),
+ * trilinear or Hermite, into s[0 .. n - 1] (simd/interp_batch.h): those of
+ * src/interp.c's locate, trilinear_weights or hermite_weights and
+ * shl__hermite_row_weights, bit for bit, rounded to float. */
+typedef void (*shl__interp_setup_ff_fn)(const shl__interp_geom *g, int method, int n, const float *pts,
+                                        shl__interp_point_ff *s);
 
 /* Wu 2020 Alg. 4 multiplied out into one weighted sum of the 32 rows it reads:
  * out = z0 h0 + z1 h0_z + z2 h1 + z3 h1_z weighs g[q], g_y[q], g_z[q] (pair q:
@@ -197,6 +215,7 @@ struct shl__isa {
     shl__sphere_batch_fn sphere_batch;
     shl__interp_fn interp_f; /* scalar: the double reference of src/interp_kernel.h */
     shl__interp_ff_fn interp_ff; /* float sums (shl_grid_interp_f); scalar: shl__interp_ff_ref */
+    shl__interp_setup_ff_fn interp_setup_ff; /* its points' set-up, trilinear and Hermite */
     void (*accumulate)(size_t n, float s, const float *x, float *y); /* y += s x (simd/lights_batch.h) */
     shl__poly_zh_fn poly_zh;           /* shl_polygon's ZH integrals (simd/poly_zh_batch.h) */
     shl__poly_grad_sh_fn poly_grad_sh; /* shl_polygon_grad */
@@ -233,6 +252,8 @@ void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp
                              shl__interp_ahead *ahead, double *out);                                   \
     void shl__interp_ff_##isa(const float *data, int method, int nc, const shl__interp_point_ff *s,     \
                               shl__interp_ahead *ahead, float *out);                                   \
+    void shl__interp_setup_ff_##isa(const shl__interp_geom *g, int method, int n, const float *pts,   \
+                                    shl__interp_point_ff *s);                                         \
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \
     void shl__poly_zh_##isa(const struct shl__poly_geom *g, int lmax, double *zh);                     \
     void shl__poly_grad_sh_##isa(const struct shl__poly_geom *g, int lmax, double *coeffs, double *grad, int nc); \

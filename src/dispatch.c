@@ -75,6 +75,7 @@ static const shl__isa isas[] = {
         .sphere_batch = shl__sphere_batch_##isa,                                                       \
         .interp_f = shl__interp_f_##isa,                                                               \
         .interp_ff = shl__interp_ff_##isa,                                                             \
+        .interp_setup_ff = shl__interp_setup_ff_##isa,                                                 \
         .accumulate = shl__accumulate_##isa,                                                           \
         .poly_zh = shl__poly_zh_##isa,                                                                 \
         .poly_grad_sh = shl__poly_grad_sh_##isa,                                                       \

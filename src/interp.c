@@ -179,14 +179,14 @@ static void setup_point(const interp_job *job, long p, point_setup *s)
 /* The rows point s reads: Taylor and Hermite, all 12 nc elements of each
  * corner, corners 2q and 2q+1 adjacent nodes (one row of two nodes each);
  * trilinear, the 3 nc values of each corner. */
-static void ahead_rows(const shl_grid *g, int method, const point_setup *s, shl__interp_ahead *a)
+static void ahead_rows(const shl_grid *g, int method, const size_t ofs[8], shl__interp_ahead *a)
 {
     const size_t esize = g->storage == SHL_GRID_DOUBLE ? sizeof(double) : sizeof(float);
     const char *data = g->data;
     const int pairs = method != SHL_INTERP_TRILINEAR;
     a->nrange = pairs ? 4 : 8;
     a->bytes = (pairs ? 2 * g->node_len : 3 * (size_t)g->nc) * esize;
-    for (int r = 0; r < a->nrange; ++r) a->row[r] = data + s->ofs[pairs ? 2 * r : r] * esize;
+    for (int r = 0; r < a->nrange; ++r) a->row[r] = data + ofs[pairs ? 2 * r : r] * esize;
 }
 
 /* Two points in flight: point p + 1's set-up is made before point p's
@@ -205,7 +205,7 @@ static void interp_range(void *arg, int worker, long begin, long end)
         shl__interp_ahead ahead = {.nrange = 0};
         if (p + 1 < end) {
             setup_point(job, p + 1, &s[(p + 1) & 1]);
-            if (job->ahead) ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
+            if (job->ahead) ahead_rows(g, job->method, s[(p + 1) & 1].ofs, &ahead);
         }
         double *out = job->out + nv * (size_t)p;
         if (g->storage == SHL_GRID_DOUBLE)
@@ -281,49 +281,54 @@ typedef struct {
     const float *pts;
     float *out;
     int ahead; /* as interp_job */
+    shl__interp_geom geom; /* g's, for shl__interp_setup_ff */
 } interp_job_ff;
 
-/* Point p's double set-up s (cell, weights) and its float kernel's view sf:
- * the row weights (Hermite: multiplied out, shl__hermite_row_weights) rounded
- * to float once. */
-static void setup_point_ff(const interp_job_ff *job, long p, point_setup *s, shl__interp_point_ff *sf)
+/* The set-up of points p0 .. p0 + n - 1 (n <= SHL__INTERP_FF_BLOCK) into sf[0 .. n - 1]:
+ * trilinear and Hermite across the block by the context's kernel
+ * (simd/interp_batch.h, shl__interp_setup_ff); Taylor (pow per corner) point by
+ * point, setup_at; weights rounded to float once. */
+static void setup_block_ff(const interp_job_ff *job, long p0, int n, shl__interp_point_ff *sf)
 {
-    const float *x = job->pts + 3 * p;
-    const double xd[3] = {x[0], x[1], x[2]};
-    setup_at(job->g, job->method, job->b, xd, s);
-    for (int j = 0; j < 8; ++j) sf->ofs[j] = s->ofs[j];
-    if (job->method == SHL_INTERP_HERMITE) {
-        double w[8], wd[8][3]; /* locals: kept in registers, not stored and reloaded */
-        shl__hermite_row_weights(s, w, wd);
-        for (int j = 0; j < 8; ++j) {
-            sf->w[j] = (float)w[j];
-            for (int a = 0; a < 3; ++a) sf->wd[j][a] = (float)wd[j][a];
-        }
+    const shl_grid *g = job->g;
+    const float *pts = job->pts + 3 * p0;
+    if (job->method != SHL_INTERP_TAYLOR) {
+        g->isa->interp_setup_ff(&job->geom, job->method, n, pts, sf);
         return;
     }
-    for (int j = 0; j < 8; ++j) {
-        sf->w[j] = (float)s->w[j];
-        for (int a = 0; a < 3 && job->method == SHL_INTERP_TAYLOR; ++a) sf->wd[j][a] = (float)s->wd[j][a];
+    for (int i = 0; i < n; ++i) {
+        const double x[3] = {pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]};
+        point_setup s;
+        setup_at(g, job->method, job->b, x, &s);
+        for (int j = 0; j < 8; ++j) {
+            sf[i].ofs[j] = s.ofs[j];
+            sf[i].w[j] = (float)s.w[j];
+            for (int a = 0; a < 3; ++a) sf[i].wd[j][a] = (float)s.wd[j][a];
+        }
     }
 }
 
-/* interp_range with float sums: two points in flight, the same look-ahead. */
+/* interp_range with float sums: set-ups a block ahead (the next block's made
+ * before the current block's last point), the same look-ahead. */
 static void interp_range_ff(void *arg, int worker, long begin, long end)
 {
     const interp_job_ff *job = arg;
     const shl_grid *g = job->g;
     const size_t nv = 3 * (size_t)g->nc;
-    point_setup s[2];
-    shl__interp_point_ff sf[2];
+    shl__interp_point_ff sf[2][SHL__INTERP_FF_BLOCK];
     (void)worker;
-    if (begin < end) setup_point_ff(job, begin, &s[begin & 1], &sf[begin & 1]);
+    if (begin < end) setup_block_ff(job, begin, end - begin < SHL__INTERP_FF_BLOCK ? (int)(end - begin) : SHL__INTERP_FF_BLOCK, sf[0]);
     for (long p = begin; p < end; ++p) {
+        const long k = p - begin, next = p + 1;
+        const shl__interp_point_ff *cur = &sf[(k / SHL__INTERP_FF_BLOCK) & 1][k % SHL__INTERP_FF_BLOCK];
         shl__interp_ahead ahead = {.nrange = 0};
-        if (p + 1 < end) {
-            setup_point_ff(job, p + 1, &s[(p + 1) & 1], &sf[(p + 1) & 1]);
-            if (job->ahead) ahead_rows(g, job->method, &s[(p + 1) & 1], &ahead);
+        if (next < end) {
+            const long kn = next - begin;
+            if (kn % SHL__INTERP_FF_BLOCK == 0)
+                setup_block_ff(job, next, end - next < SHL__INTERP_FF_BLOCK ? (int)(end - next) : SHL__INTERP_FF_BLOCK, sf[(kn / SHL__INTERP_FF_BLOCK) & 1]);
+            if (job->ahead) ahead_rows(g, job->method, sf[(kn / SHL__INTERP_FF_BLOCK) & 1][kn % SHL__INTERP_FF_BLOCK].ofs, &ahead);
         }
-        g->isa->interp_ff(g->data, job->method, g->nc, &sf[p & 1], &ahead, job->out + nv * (size_t)p);
+        g->isa->interp_ff(g->data, job->method, g->nc, cur, &ahead, job->out + nv * (size_t)p);
     }
 }
 
@@ -343,7 +348,14 @@ int shl_grid_interp_f(const shl_grid *grid, int method, double taylor_b, int npt
     for (size_t i = 0; i < 3 * (size_t)npts; ++i)
         if (!isfinite(pts[i])) return SHL_ENONFINITE;
     interp_job_ff job = {grid, method, taylor_b, pts, rgb,
-                         grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES};
+                         grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES,
+                         {.node_len = grid->node_len}};
+    for (int a = 0; a < 3; ++a) {
+        job.geom.lo[a] = grid->lo[a];
+        job.geom.hi[a] = grid->hi[a];
+        job.geom.h[a] = grid->h[a];
+        job.geom.res[a] = grid->res[a];
+    }
     const int nw = shl__parallel_workers(npts, 256, nthreads); /* as grid_interp */
     return shl__parallel_for_guided(npts, 32, nw, interp_range_ff, &job);
 }
