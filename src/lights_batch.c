@@ -130,7 +130,8 @@ void shl__lights_batch_f_block(const shl_ctx *ctx, const shl_lights *lights, int
     if (shared) memset(acc, 0, sizeof(float) * ctx->isa->poly_acc_floats(ctx->lmax, grad != NULL, m));
     for (int i = 0; i < lights->count; ++i) {
         const shl__light *li = &lights->items[i];
-        const double *v = lights->verts + li->vofs;
+        /* spheres have no vertices (lights->verts may be NULL: no offset from it) */
+        const double *v = li->kind == SHL__LIGHT_POLYGON ? lights->verts + li->vofs : NULL;
         int k = 0;
         for (int j = 0; j < m; ++j) {
             const float *pt = pts + 3 * (size_t)j;
