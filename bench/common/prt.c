@@ -1,4 +1,5 @@
 #include "prt.h"
+#include "sh_basis.h"
 #include "parfor.h"
 #include "util.h"
 #include "vec3.h"
@@ -173,8 +174,29 @@ typedef struct {
     const prt *p;
     const int *subset;
     int ncl, lmax, glossy;
-    const double *lobe; /* per material: lmax+1 ZH (glossy materials) */
+    const float *lobe; /* per material: the glossy lobe's ZH times sqrt(4 pi / (2l + 1)), l <= lmax: the weights
+                          of Y_lm(r) in its SH (HVL Eq. 15) */
 } shade_job;
+
+/* s[c] = sum_k L[c ncl + k] y[k], k < n, for the 3 colours c, in float with 4 partial sums per
+ * colour (k mod 4; the last n mod 4 terms go to the first): gcc -O2 runs each colour's 4 in one SSE
+ * register, a quarter of the additions and no chain of n dependent ones.  Error: at most about
+ * (n / 4 + 3) 2^-24 sum_k |L y| (float products and sums). */
+static void dot3(const float *L, int ncl, const float *y, int n, float s[3])
+{
+    for (int c = 0; c < 3; ++c, L += ncl) {
+        float a0 = 0.0f, a1 = 0.0f, a2 = 0.0f, a3 = 0.0f;
+        int k = 0;
+        for (; k + 4 <= n; k += 4) {
+            a0 += L[k] * y[k];
+            a1 += L[k + 1] * y[k + 1];
+            a2 += L[k + 2] * y[k + 2];
+            a3 += L[k + 3] * y[k + 3];
+        }
+        for (; k < n; ++k) a0 += L[k] * y[k];
+        s[c] = (a0 + a1) + (a2 + a3);
+    }
+}
 
 /* Shades points [begin, end) from their coefficients coef (lighting_eval's consumer). */
 static void shade_block(void *arg, int worker, long begin, long end, const float *coef)
@@ -184,40 +206,28 @@ static void shade_block(void *arg, int worker, long begin, long end, const float
     const prt *p = j->p;
     const scene *s = p->s;
     const int ncl = j->ncl, nct = p->T.nc, nc = ncl < nct ? ncl : nct;
-    double sh[SHL_NCOEFFS(SHL_LMAX_MAX)];
     for (long i = begin; i < end; ++i) {
         const long v = j->subset ? j->subset[i] : i;
         const scene_material *mt = &s->mats[s->geom.mat[v]];
         const float *L = coef + (size_t)(i - begin) * 3 * ncl, *T = p->T.t + (size_t)v * nct;
         float *out = p->vrad + 3 * v;
-        double d0 = 0.0, d1 = 0.0, d2 = 0.0; /* three independent sums, each in the order of k */
-        for (int k = 0; k < nc; ++k) {
-            d0 += (double)L[k] * T[k];
-            d1 += (double)L[ncl + k] * T[k];
-            d2 += (double)L[2 * ncl + k] * T[k];
-        }
-        out[0] = (float)(mt->albedo[0] * d0);
-        out[1] = (float)(mt->albedo[1] * d1);
-        out[2] = (float)(mt->albedo[2] * d2);
+        float dif[3];
+        dot3(L, ncl, T, nc, dif);
+        for (int c = 0; c < 3; ++c) out[c] = (float)(mt->albedo[c] * dif[c]);
         if (j->glossy && mt->kind != MAT_DIFFUSE) {
             const double *x = s->geom.pos + 3 * v, *n = s->geom.nrm + 3 * v;
-            double wo[3], r[3];
-            v3_sub(wo, p->cam.eye, x);
-            v3_normalize(wo);
-            const double c = v3_dot(n, wo);
-            if (c > 0) {
-                v3_scale(r, n, 2 * c);
-                v3_sub(r, r, wo);
-                shl_zh_to_sh(j->lmax, j->lobe + (size_t)s->geom.mat[v] * (SHL_LMAX_MAX + 1), r, sh);
-                double g0 = 0.0, g1 = 0.0, g2 = 0.0;
-                for (int k = 0; k < ncl; ++k) {
-                    g0 += (double)L[k] * sh[k];
-                    g1 += (double)L[ncl + k] * sh[k];
-                    g2 += (double)L[2 * ncl + k] * sh[k];
-                }
-                out[0] += (float)(mt->ks * g0);
-                out[1] += (float)(mt->ks * g1);
-                out[2] += (float)(mt->ks * g2);
+            double d[3], r[3];
+            v3_sub(d, p->cam.eye, x);
+            const double nd = v3_dot(n, d);
+            if (nd > 0) { /* r: the mirror direction of the view, 2 (n . wo) n - wo with wo = d / |d| */
+                v3_scale(r, n, 2 * nd);
+                v3_sub(r, r, d);
+                v3_normalize(r);
+                const float u[3] = {(float)r[0], (float)r[1], (float)r[2]};
+                float y[SHL_NCOEFFS(SHL_LMAX_MAX)], g[3];
+                shl__sh_eval_w_f(j->lmax, u, j->lobe + (size_t)s->geom.mat[v] * (SHL_LMAX_MAX + 1), y);
+                dot3(L, ncl, y, ncl, g);
+                for (int c = 0; c < 3; ++c) out[c] += (float)(mt->ks * g[c]);
             }
         }
         if (p->indirect)
@@ -230,7 +240,8 @@ int prt_render(prt *p, const lighting_method *m, const int *subset, long nsub, f
     const scene *s = p->s;
     const long n = subset ? nsub : s->geom.nv;
     const int ncl = SHL_NCOEFFS(m->lmax);
-    double *pts = NULL, *lobe = NULL;
+    double *pts = NULL;
+    float *lobe = NULL;
     lighting *L = NULL;
     int st = -1;
     if (subset) {
@@ -239,12 +250,14 @@ int prt_render(prt *p, const lighting_method *m, const int *subset, long nsub, f
         memset(p->vrad, 0, sizeof(float) * 3 * (size_t)s->geom.nv);
     }
     const int glossy = (s->effects & FX_GLOSSY) != 0;
-    if (!(lobe = calloc((size_t)s->nmats * (SHL_LMAX_MAX + 1), sizeof(double)))) goto done;
+    if (!(lobe = calloc((size_t)s->nmats * (SHL_LMAX_MAX + 1), sizeof(float)))) goto done;
     for (int i = 0; glossy && i < s->nmats; ++i) {
         const scene_material *mt = &s->mats[i];
-        double *z = lobe + (size_t)i * (SHL_LMAX_MAX + 1);
+        double z[SHL_LMAX_MAX + 1];
         if (mt->kind == MAT_PHONG && shl_zh_phong(m->lmax, mt->exponent, z) != SHL_OK) goto done;
         if (mt->kind == MAT_GGX && shl_zh_ggx(m->lmax, mt->alpha, z) != SHL_OK) goto done;
+        for (int l = 0; mt->kind != MAT_DIFFUSE && l <= m->lmax; ++l)
+            lobe[(size_t)i * (SHL_LMAX_MAX + 1) + l] = (float)(shl__sh_k15_d[l] * z[l]);
     }
     if (!(L = lighting_prepare(s, m, p->lo, p->hi, p->nthreads, &t->prepare))) goto done;
     /* Lighting and shading fused per block of LIGHTING_BLOCK vertices (the coefficients stay in
