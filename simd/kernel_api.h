@@ -134,9 +134,12 @@ typedef struct {
 } shl__interp_point_ff;
 
 /* The 3 nc values out[c nc + k] of point s from float node data in float sums;
- * trilinear: method == SHL_INTERP_TRILINEAR (wd unused), else the gradient form. */
+ * trilinear: method == SHL_INTERP_TRILINEAR (wd unused), else the gradient form.
+ * s2: NULL, or a second point of the same cell (equal ofs), whose values go to
+ * out2: each corner row is then loaded once for both; each point's values are
+ * those of a call for it alone, bit for bit. */
 typedef void (*shl__interp_ff_fn)(const float *data, int method, int nc, const shl__interp_point_ff *s,
-                                  shl__interp_ahead *ahead, float *out);
+                                  const shl__interp_point_ff *s2, shl__interp_ahead *ahead, float *out, float *out2);
 
 /* A grid's geometry (src/grid.h) for shl__interp_setup_ff. */
 typedef struct {
@@ -230,7 +233,7 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
 /* The float-sum reference (src/interp.c): the scalar instance of shl__interp_ff, and
  * the others' for rows shorter than a float vector. */
 void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp_point_ff *s,
-                        shl__interp_ahead *ahead, float *out);
+                        const shl__interp_point_ff *s2, shl__interp_ahead *ahead, float *out, float *out2);
 
 /* The kernels of one ISA, each defined by its kernel text compiled with that
  * ISA's helper (suffix _<isa>, SHL_ISA_SUFFIX); declared for every line of
@@ -251,7 +254,8 @@ void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp
     void shl__interp_f_##isa(const float *data, int method, int nc, const shl__interp_point *s,         \
                              shl__interp_ahead *ahead, double *out);                                   \
     void shl__interp_ff_##isa(const float *data, int method, int nc, const shl__interp_point_ff *s,     \
-                              shl__interp_ahead *ahead, float *out);                                   \
+                              const shl__interp_point_ff *s2, shl__interp_ahead *ahead, float *out,    \
+                              float *out2);                                                            \
     void shl__interp_setup_ff_##isa(const shl__interp_geom *g, int method, int n, const float *pts,   \
                                     shl__interp_point_ff *s);                                         \
     void shl__accumulate_##isa(size_t n, float s, const float *x, float *y);                          \

@@ -32,11 +32,8 @@ void shl__interp_ref_f(const float *data, int method, int nc, const shl__interp_
  * the SIMD kernels' order -- trilinear, corners 0..7; Taylor and Hermite, per
  * channel, corners 0-3 and 4-7 summed apart (value, then x, y, z gradient rows),
  * then added. */
-void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp_point_ff *s,
-                        shl__interp_ahead *ahead, float *out)
+static void interp_ff_point(const float *data, int method, int nc, const shl__interp_point_ff *s, float *out)
 {
-    shl__interp_ahead_plan(ahead, 1);
-    shl__interp_ahead_step(ahead);
     const float *f[8];
     for (int j = 0; j < 8; ++j) f[j] = data + s->ofs[j];
     if (method == SHL_INTERP_TRILINEAR) {
@@ -59,6 +56,15 @@ void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp
             }
             out[c * nc + k] = half[0] + half[1];
         }
+}
+
+void shl__interp_ff_ref(const float *data, int method, int nc, const shl__interp_point_ff *s,
+                        const shl__interp_point_ff *s2, shl__interp_ahead *ahead, float *out, float *out2)
+{
+    shl__interp_ahead_plan(ahead, 1);
+    shl__interp_ahead_step(ahead);
+    interp_ff_point(data, method, nc, s, out);
+    if (s2) interp_ff_point(data, method, nc, s2, out2);
 }
 
 /* Cell and local coordinates of p, clamped to the box. */
@@ -308,27 +314,40 @@ static void setup_block_ff(const interp_job_ff *job, long p0, int n, shl__interp
     }
 }
 
-/* interp_range with float sums: set-ups a block ahead (the next block's made
- * before the current block's last point), the same look-ahead. */
+/* Point k's set-up in interp_range_ff's ring of two blocks. */
+static shl__interp_point_ff *ring_at(shl__interp_point_ff sf[2][SHL__INTERP_FF_BLOCK], long k)
+{
+    return &sf[(k / SHL__INTERP_FF_BLOCK) & 1][k % SHL__INTERP_FF_BLOCK];
+}
+
+/* interp_range with float sums: set-ups a block at a time, ahead of the points
+ * (a ring of two blocks), the same look-ahead.  Two consecutive points of one
+ * cell (most of a mesh's, in mesh order) go to the kernel together, which loads
+ * their corner rows once; the results are those of one point at a time. */
 static void interp_range_ff(void *arg, int worker, long begin, long end)
 {
     const interp_job_ff *job = arg;
     const shl_grid *g = job->g;
     const size_t nv = 3 * (size_t)g->nc;
+    const long n = end - begin;
     shl__interp_point_ff sf[2][SHL__INTERP_FF_BLOCK];
+    long ready = 0; /* points begin .. begin + ready - 1 are set up */
     (void)worker;
-    if (begin < end) setup_block_ff(job, begin, end - begin < SHL__INTERP_FF_BLOCK ? (int)(end - begin) : SHL__INTERP_FF_BLOCK, sf[0]);
-    for (long p = begin; p < end; ++p) {
-        const long k = p - begin, next = p + 1;
-        const shl__interp_point_ff *cur = &sf[(k / SHL__INTERP_FF_BLOCK) & 1][k % SHL__INTERP_FF_BLOCK];
-        shl__interp_ahead ahead = {.nrange = 0};
-        if (next < end) {
-            const long kn = next - begin;
-            if (kn % SHL__INTERP_FF_BLOCK == 0)
-                setup_block_ff(job, next, end - next < SHL__INTERP_FF_BLOCK ? (int)(end - next) : SHL__INTERP_FF_BLOCK, sf[(kn / SHL__INTERP_FF_BLOCK) & 1]);
-            if (job->ahead) ahead_rows(g, job->method, sf[(kn / SHL__INTERP_FF_BLOCK) & 1][kn % SHL__INTERP_FF_BLOCK].ofs, &ahead);
+    for (long k = 0; k < n;) {
+        /* through k + 2 (a pair and the next point's rows): its block replaces the one before k's */
+        while (ready < n && ready <= k + 2) {
+            const int m = n - ready < SHL__INTERP_FF_BLOCK ? (int)(n - ready) : SHL__INTERP_FF_BLOCK;
+            setup_block_ff(job, begin + ready, m, ring_at(sf, ready));
+            ready += m;
         }
-        g->isa->interp_ff(g->data, job->method, g->nc, cur, &ahead, job->out + nv * (size_t)p);
+        const shl__interp_point_ff *cur = ring_at(sf, k), *cur2 = NULL;
+        if (k + 1 < n && ring_at(sf, k + 1)->ofs[0] == cur->ofs[0]) cur2 = ring_at(sf, k + 1);
+        const long next = k + 1 + (cur2 != NULL);
+        shl__interp_ahead ahead = {.nrange = 0};
+        if (next < n && job->ahead) ahead_rows(g, job->method, ring_at(sf, next)->ofs, &ahead);
+        float *out = job->out + nv * (size_t)(begin + k);
+        g->isa->interp_ff(g->data, job->method, g->nc, cur, cur2, &ahead, out, cur2 ? out + nv : NULL);
+        k = next;
     }
 }
 

@@ -595,17 +595,42 @@ SHL_TEST(simd_interp_f_vs_reference)
     harness_note("%s", note);
 }
 
-/* Look-ahead and threads change no value: on every ISA, lmax 0, 3, 8, every
- * method, a grid below and one above SHL__INTERP_AHEAD_BYTES, a call over all
- * points, an odd sub-range and 3 threads equal one call per point, bit for bit. */
+/* pts reordered by cell (x fastest, as src/interp.c's locate picks it; stable):
+ * runs of points of one cell, which the float kernels take two at a time. */
+static void sort_by_cell(const double lo[3], const double hi[3], const int res[3], double *pts)
+{
+    static double tmp[3 * IP_NP];
+    static long key[IP_NP];
+    static int order[IP_NP];
+    for (int p = 0; p < IP_NP; ++p) {
+        key[p] = 0;
+        for (int a = 2; a >= 0; --a) {
+            const double h = (hi[a] - lo[a]) / (res[a] - 1), x = fmin(fmax(pts[3 * p + a], lo[a]), hi[a]);
+            const double t = (x - lo[a]) / h;
+            key[p] = key[p] * res[a] + (t < res[a] - 1 ? (int)t : res[a] - 2);
+        }
+        int q = p; /* insertion sort of the indices */
+        for (; q > 0 && key[order[q - 1]] > key[p]; --q) order[q] = order[q - 1];
+        order[q] = p;
+    }
+    memcpy(tmp, pts, sizeof tmp);
+    for (int p = 0; p < IP_NP; ++p)
+        for (int a = 0; a < 3; ++a) pts[3 * p + a] = tmp[3 * order[p] + a];
+}
+
+/* Look-ahead and threads change no value: on every ISA, lmax 0, 3, 5, 8, every
+ * method, a grid below and one above SHL__INTERP_AHEAD_BYTES, random points and
+ * the same sorted by cell (consecutive points of one cell: the kernels' pairs), a
+ * call over all points, an odd sub-range and 3 threads equal one call per point,
+ * bit for bit. */
 SHL_TEST(simd_interp_f_lookahead_and_threads)
 {
     const double lo[3] = {-1.0, 0.25, -0.5}, hi[3] = {1.5, 1.0, 2.5};
-    const int lmaxes[3] = {0, 3, IP_LMAX};
+    const int lmaxes[4] = {0, 3, 5, IP_LMAX};
     static double pts[3 * IP_NP];
     static float ptf[3 * IP_NP], one[3 * IP_NC * IP_NP], all[3 * IP_NC * IP_NP];
     for (int i = 0; i < NISA; ++i)
-        for (int l = 0; l < 3; ++l) {
+        for (int l = 0; l < 4; ++l) {
             shl_ctx *ctx = isa_ctx(isas[i], lmaxes[l]);
             if (!ctx) continue;
             const int nv = 3 * SHL_NCOEFFS(lmaxes[l]);
@@ -622,18 +647,21 @@ SHL_TEST(simd_interp_f_lookahead_and_threads)
                 rng_t rng = {(uint64_t)(170 + l)};
                 random_nodes(&rng, &g, 1, res, h, nv / 3);
                 interp_points(&rng, lo, hi, res, pts);
-                for (int q = 0; q < 3 * IP_NP; ++q) ptf[q] = (float)pts[q];
-                for (int m = 0; m < 3; ++m) {
-                    for (int p = 0; p < IP_NP; ++p)
-                        CHECK(shl_grid_interp_f(g, m, 1.5, 1, ptf + 3 * p, one + (size_t)nv * p, 1) == SHL_OK);
-                    const size_t bytes = sizeof(float) * nv * IP_NP;
-                    CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 1) == SHL_OK);
-                    CHECK(memcmp(one, all, bytes) == 0);
-                    memset(all, 0, bytes);
-                    CHECK(shl_grid_interp_f(g, m, 1.5, 101, ptf + 3 * 7, all + (size_t)nv * 7, 1) == SHL_OK);
-                    CHECK(memcmp(one + (size_t)nv * 7, all + (size_t)nv * 7, sizeof(float) * nv * 101) == 0);
-                    CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 3) == SHL_OK);
-                    CHECK(memcmp(one, all, bytes) == 0);
+                for (int sorted = 0; sorted < 2; ++sorted) {
+                    if (sorted) sort_by_cell(lo, hi, res, pts);
+                    for (int q = 0; q < 3 * IP_NP; ++q) ptf[q] = (float)pts[q];
+                    for (int m = 0; m < 3; ++m) {
+                        for (int p = 0; p < IP_NP; ++p)
+                            CHECK(shl_grid_interp_f(g, m, 1.5, 1, ptf + 3 * p, one + (size_t)nv * p, 1) == SHL_OK);
+                        const size_t bytes = sizeof(float) * nv * IP_NP;
+                        CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 1) == SHL_OK);
+                        CHECK(memcmp(one, all, bytes) == 0);
+                        memset(all, 0, bytes);
+                        CHECK(shl_grid_interp_f(g, m, 1.5, 101, ptf + 3 * 7, all + (size_t)nv * 7, 1) == SHL_OK);
+                        CHECK(memcmp(one + (size_t)nv * 7, all + (size_t)nv * 7, sizeof(float) * nv * 101) == 0);
+                        CHECK(shl_grid_interp_f(g, m, 1.5, IP_NP, ptf, all, 3) == SHL_OK);
+                        CHECK(memcmp(one, all, bytes) == 0);
+                    }
                 }
                 shl_grid_destroy(g);
             }
