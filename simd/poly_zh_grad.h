@@ -13,6 +13,14 @@
 #define gv_edges GV_CAT(gv_edges_, GW)
 #define gv_accumulate GV_CAT(gv_accumulate_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
+#if GW == 4 /* lanes i, j, k, l of a and b's 8 */
+#ifdef __clang__
+#define GV_SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+typedef long long gv_idx4 __attribute__((vector_size(4 * sizeof(long long))));
+#define GV_SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (gv_idx4){i, j, k, l})
+#endif
+#endif
 
 /* *sum += x; fresh: *sum = 0 + x (the sum's first term: no zeroing pass, and 0 + x keeps the
  * bits of adding x to a zeroed sum, -0 included) */
@@ -115,13 +123,13 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
                      double *zh_grad, double *zh4, double gscale, int area)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
-    double t[3][GW];
-    for (int k = 0; k < GW; ++k)
-        for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)][c];
-    gv ux, uy, uz;
-    memcpy(&ux, t[0], sizeof ux);
-    memcpy(&uy, t[1], sizeof uy);
-    memcpy(&uz, t[2], sizeof uz);
+    gv ux = gv_set1(0.0), uy = ux, uz = ux;
+    /* lanes set in registers (scalar stores reloaded as a vector stall store forwarding) */
+#pragma GCC unroll 8
+    for (int k = 0; k < GW; ++k) {
+        const double *u = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)];
+        ux[k] = u[0], uy[k] = u[1], uz[k] = u[2];
+    }
     gv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
     /* n = 0 (no polygon left, polygon.c: all sums 0) or n >= 3: groups of 3, of 2 where 2 or 4
      * are left; the first group starts the sums */
@@ -153,6 +161,17 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
             const gv kl = gv_set1(bc->norm[l]), kg = gv_set1(bc->norm[l] * gscale);
             const gv z = kl * surf[l], zx = kg * gsum[0][l], zy = kg * gsum[1][l], zz = kg * gsum[2][l]; /* Eq. 13 */
             double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
+#if GW == 4
+            if (cnt == 4) { /* a 4 x 4 transpose in two steps of two-vector shuffles (8 in all) */
+                const gv t0 = GV_SHUF(z, zx, 0, 4, 2, 6), t1 = GV_SHUF(z, zx, 1, 5, 3, 7);
+                const gv t2 = GV_SHUF(zy, zz, 0, 4, 2, 6), t3 = GV_SHUF(zy, zz, 1, 5, 3, 7);
+                const gv q0 = GV_SHUF(t0, t2, 0, 1, 4, 5), q1 = GV_SHUF(t1, t3, 0, 1, 4, 5);
+                const gv q2 = GV_SHUF(t0, t2, 2, 3, 6, 7), q3 = GV_SHUF(t1, t3, 2, 3, 6, 7);
+                memcpy(o, &q0, sizeof q0), memcpy(o + 4, &q1, sizeof q1);
+                memcpy(o + 8, &q2, sizeof q2), memcpy(o + 12, &q3, sizeof q3);
+                continue;
+            }
+#endif
             /* lane k of the 4 vectors side by side, k a constant after unrolling: a shuffle
              * in the registers (with k a variable, or through a stack array, gcc stored the
              * vectors and loaded them back in pieces, a fifth of this kernel's time) */
@@ -174,6 +193,7 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
 }
 
 #undef gv_block
+#undef GV_SHUF
 #undef gv_edges
 #undef gv_accumulate
 #undef gv_scatter
