@@ -88,28 +88,35 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
             d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k][l];
         }
     }
-    /* Wu's recurrence (polygon_zh.h) one edge at a time (its chain is short; G edges' state
-     * would not fit the registers), then Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+    /* Wu's recurrence (polygon_zh.h), the G edges side by side in each band step (their chains,
+     * I_l -> J_l+1 -> I_l+2, overlap), then Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+    gv i0[GMAX], fp1[GMAX], v[GMAX], mx[GMAX], my[GMAX], mz[GMAX], i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX];
+#pragma GCC unroll 3
     for (int k = 0; k < G; ++k) {
         const int e = e0 + k;
-        const gv i0 = gv_set1(g->f_integral[e]), fp1 = gv_set1(g->fprime1[e]), v = gv_dot(ux, uy, uz, g->gvec[e]);
-        const gv mx = gv_set1(g->mu[e][0]), my = gv_set1(g->mu[e][1]), mz = gv_set1(g->mu[e][2]);
+        i0[k] = gv_set1(g->f_integral[e]), fp1[k] = gv_set1(g->fprime1[e]), v[k] = gv_dot(ux, uy, uz, g->gvec[e]);
+        mx[k] = gv_set1(g->mu[e][0]), my[k] = gv_set1(g->mu[e][1]), mz[k] = gv_set1(g->mu[e][2]);
         /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-        gv i_lm1 = (v * gv_set1(g->gamma[e]) - (fp1 * da[k] - i0 * a[k])) * gv_set1(0.5); /* I_1 */
-        gv j_lm1 = i0, j_lm2 = gv_set1(0.0);                                              /* J_1, J_0 = 0 */
+        i_lm1[k] = (v[k] * gv_set1(g->gamma[e]) - (fp1[k] * da[k] - i0[k] * a[k])) * gv_set1(0.5); /* I_1 */
+        j_lm1[k] = i0[k], j_lm2[k] = gv_set1(0.0);                                                  /* J_1, J_0 = 0 */
         const int fresh = first && k == 0;
-        gv_accumulate(&gsum[0][0], mx * i0, fresh), gv_accumulate(&gsum[1][0], my * i0, fresh);
-        gv_accumulate(&gsum[2][0], mz * i0, fresh);
+        gv_accumulate(&gsum[0][0], mx[k] * i0[k], fresh), gv_accumulate(&gsum[1][0], my[k] * i0[k], fresh);
+        gv_accumulate(&gsum[2][0], mz[k] * i0[k], fresh);
         if (lmax >= 1) {
-            gv_accumulate(&gsum[0][1], mx * i_lm1, fresh), gv_accumulate(&gsum[1][1], my * i_lm1, fresh);
-            gv_accumulate(&gsum[2][1], mz * i_lm1, fresh);
+            gv_accumulate(&gsum[0][1], mx[k] * i_lm1[k], fresh), gv_accumulate(&gsum[1][1], my[k] * i_lm1[k], fresh);
+            gv_accumulate(&gsum[2][1], mz[k] * i_lm1[k], fresh);
         }
-        for (int l = 2; l <= lmax; ++l) {
-            const gv il = (v * dl[k][l] - j_lm1 - (fp1 * dpl[k][l] - i0 * pl[k][l])) * gv_set1(bc->inv_l[l + 1]);
-            const gv jl = gv_set1(bc->twol_m1[l]) * i_lm1 + j_lm2;
-            j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-            gv_accumulate(&gsum[0][l], mx * il, fresh), gv_accumulate(&gsum[1][l], my * il, fresh);
-            gv_accumulate(&gsum[2][l], mz * il, fresh);
+    }
+    for (int l = 2; l <= lmax; ++l) {
+        const gv inv = gv_set1(bc->inv_l[l + 1]), tlm1 = gv_set1(bc->twol_m1[l]);
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            const gv il = (v[k] * dl[k][l] - j_lm1[k] - (fp1[k] * dpl[k][l] - i0[k] * pl[k][l])) * inv;
+            const gv jl = tlm1 * i_lm1[k] + j_lm2[k];
+            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+            const int fresh = first && k == 0;
+            gv_accumulate(&gsum[0][l], mx[k] * il, fresh), gv_accumulate(&gsum[1][l], my[k] * il, fresh);
+            gv_accumulate(&gsum[2][l], mz[k] * il, fresh);
         }
     }
 }
