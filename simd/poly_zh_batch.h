@@ -63,7 +63,34 @@ typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
 #endif
 #define lv ZV_CAT(dv, LW)
 #define lv_set1 ZV_CAT(lv, _set1)
-#define lv_load ZV_CAT(lv, _load)
+#if LW == 4 /* lanes i, j, k, l of a and b's 8 */
+#ifdef __clang__
+#define LV_SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+typedef long long lv_idx4 __attribute__((vector_size(4 * sizeof(long long))));
+#define LV_SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (lv_idx4){i, j, k, l})
+#endif
+#endif
+
+/* lanes p[k[0]], p[k[1]], ... (column c of rows k[0], ...), built in registers */
+#if LW == 4
+#define LV_LANES(x) (lv){x(0), x(1), x(2), x(3)}
+#else
+#define LV_LANES(x) (lv){x(0), x(1)}
+#endif
+static inline lv lv_gather(const double *p, const int *k)
+{
+#define LV_AT(j) p[k[j]]
+    return LV_LANES(LV_AT);
+#undef LV_AT
+}
+static inline lv lv_col(const double (*p)[3], int c, const int *k)
+{
+#define LV_AT(j) p[k[j]][c]
+    return LV_LANES(LV_AT);
+#undef LV_AT
+}
+#undef LV_LANES
 
 static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band_consts *bc, double *zh,
                     double *zh_grad, double *zh4, double gscale, int area)
@@ -76,18 +103,20 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
         for (int q = 0; q < NQ; ++q) sum[l][q] = (zq){0};
     for (int e0 = 0; e0 < n; e0 += LW) {
         const int cnt = n - e0 < LW ? n - e0 : LW;
-        double t[NF][LW];
+        int ek[LW], fk[LW];
         for (int k = 0; k < LW; ++k) {
-            const int e = e0 + (k < cnt ? k : cnt - 1), f = (e + 1 == n) ? 0 : e + 1;
-            for (int c = 0; c < 3; ++c) {
-                t[c][k] = g->w[e][c], t[3 + c][k] = g->lam[e][c], t[6 + c][k] = g->mu[e][c];
-                t[9 + c][k] = g->w[f][c], t[12 + c][k] = g->dw[e][c], t[15 + c][k] = g->gvec[e][c];
-            }
-            t[18][k] = g->gamma[e], t[19][k] = g->sin_gamma[e], t[20][k] = g->cos_gamma[e];
-            t[21][k] = g->omc_gamma[e], t[22][k] = g->f_integral[e], t[23][k] = g->fprime1[e];
+            ek[k] = e0 + (k < cnt ? k : cnt - 1);
+            fk[k] = ek[k] + 1 == n ? 0 : ek[k] + 1;
         }
+        /* the lanes built in registers (scalar stores read back as a vector would stall) */
         lv in[NF];
-        for (int i = 0; i < NF; ++i) in[i] = lv_load(t[i]);
+        for (int c = 0; c < 3; ++c) {
+            in[c] = lv_col(g->w, c, ek), in[3 + c] = lv_col(g->lam, c, ek), in[6 + c] = lv_col(g->mu, c, ek);
+            in[9 + c] = lv_col(g->w, c, fk), in[12 + c] = lv_col(g->dw, c, ek), in[15 + c] = lv_col(g->gvec, c, ek);
+        }
+        in[18] = lv_gather(g->gamma, ek), in[19] = lv_gather(g->sin_gamma, ek);
+        in[20] = lv_gather(g->cos_gamma, ek), in[21] = lv_gather(g->omc_gamma, ek);
+        in[22] = lv_gather(g->f_integral, ek), in[23] = lv_gather(g->fprime1, ek);
         const lv gamma = in[18], i0 = in[22], fp1 = in[23], mx = in[6], my = in[7], mz = in[8];
         /* Eq. 20 (gv_edges) */
         const lv a = ux * in[0] + uy * in[1] + uz * in[2], b = ux * in[3] + uy * in[4] + uz * in[5];
@@ -119,6 +148,17 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
             } else if (l == 1)
                 tb = c * b1, ti = i_lm1;
             const lv tx = mx * ti, ty = my * ti, tz = mz * ti;
+#if LW == 4 /* ZQ 4 too */
+            /* edge k's 4 terms are lane k of tb, tx, ty, tz: a 4 x 4 transpose in the registers
+             * (lane reads of the vectors went through the stack: store-forwarding stalls) */
+            const lv t0 = LV_SHUF(tb, tx, 0, 4, 2, 6), t1 = LV_SHUF(tb, tx, 1, 5, 3, 7);
+            const lv t2 = LV_SHUF(ty, tz, 0, 4, 2, 6), t3 = LV_SHUF(ty, tz, 1, 5, 3, 7);
+            const lv q[4] = {LV_SHUF(t0, t2, 0, 1, 4, 5), LV_SHUF(t1, t3, 0, 1, 4, 5), LV_SHUF(t0, t2, 2, 3, 6, 7),
+                             LV_SHUF(t1, t3, 2, 3, 6, 7)};
+#pragma GCC unroll 4
+            for (int k = 0; k < LW; ++k) /* edges in order */
+                if (k < cnt) sum[l][0] += q[k];
+#else
             for (int k = 0; k < cnt; ++k) { /* edges in order */
                 const double q[4] = {tb[k], tx[k], ty[k], tz[k]};
                 for (int h = 0; h < NQ; ++h) {
@@ -127,6 +167,7 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
                     sum[l][h] += x;
                 }
             }
+#endif
         }
     }
     double surf[SHL_LMAX_MAX + 1];
@@ -151,26 +192,6 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
         for (int ax = 0; ax < 3; ++ax) zh_grad[ax * SHL__ZH_BLOCK + at] = kl * o[1 + ax];
     }
 }
-
-/* lanes p[k[0]], p[k[1]], ... (column c of rows k[0], ...), built in registers */
-#if LW == 4
-#define LV_LANES(x) (lv){x(0), x(1), x(2), x(3)}
-#else
-#define LV_LANES(x) (lv){x(0), x(1)}
-#endif
-static inline lv lv_gather(const double *p, const int *k)
-{
-#define LV_AT(j) p[k[j]]
-    return LV_LANES(LV_AT);
-#undef LV_AT
-}
-static inline lv lv_col(const double (*p)[3], int c, const int *k)
-{
-#define LV_AT(j) p[k[j]][c]
-    return LV_LANES(LV_AT);
-#undef LV_AT
-}
-#undef LV_LANES
 
 /* shl_polygon's lone lobe d, its edges side by side as in zh_lobe: lane k does edge e0 + k's
  * arithmetic of cv_edges (simd/poly_zh_coeff.h) operation for operation, and each bsum[l]
@@ -231,7 +252,7 @@ static void cv_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
     for (int l = 2; l <= lmax; ++l) surf[l] = bc->s_b[l] * bsum[l - 1] + bc->s_s[l] * surf[l - 2]; /* Eq. 29 */
     for (int l = 0; l <= lmax; ++l) zh[(ptrdiff_t)d * SHL__ZH_STRIDE + l] = bc->norm[l] * surf[l]; /* Eq. 13 */
 }
-#undef lv_load
+#undef LV_SHUF
 #undef lv_set1
 #undef lv
 #undef LW

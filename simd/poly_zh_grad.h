@@ -13,6 +13,14 @@
 #define gv_edges GV_CAT(gv_edges_, GW)
 #define gv_accumulate GV_CAT(gv_accumulate_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
+#if GW == 4 /* lanes i, j, k, l of a and b's 8 */
+#ifdef __clang__
+#define GV_SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+typedef long long gv_idx4 __attribute__((vector_size(4 * sizeof(long long))));
+#define GV_SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (gv_idx4){i, j, k, l})
+#endif
+#endif
 
 /* *sum += x; fresh: *sum = 0 + x (the sum's first term: no zeroing pass, and 0 + x keeps the
  * bits of adding x to a zeroed sum, -0 included) */
@@ -80,28 +88,35 @@ __attribute__((always_inline)) static inline void gv_edges(const shl__poly_geom 
             d_lm2[k] = d_lm1[k], d_lm1[k] = dl[k][l];
         }
     }
-    /* Wu's recurrence (polygon_zh.h) one edge at a time (its chain is short; G edges' state
-     * would not fit the registers), then Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+    /* Wu's recurrence (polygon_zh.h), the G edges side by side in each band step (their chains,
+     * I_l -> J_l+1 -> I_l+2, overlap), then Wu Eq. 11, 29: sum over edges of mu_e I_l, edges in order */
+    gv i0[GMAX], fp1[GMAX], v[GMAX], mx[GMAX], my[GMAX], mz[GMAX], i_lm1[GMAX], j_lm1[GMAX], j_lm2[GMAX];
+#pragma GCC unroll 3
     for (int k = 0; k < G; ++k) {
         const int e = e0 + k;
-        const gv i0 = gv_set1(g->f_integral[e]), fp1 = gv_set1(g->fprime1[e]), v = gv_dot(ux, uy, uz, g->gvec[e]);
-        const gv mx = gv_set1(g->mu[e][0]), my = gv_set1(g->mu[e][1]), mz = gv_set1(g->mu[e][2]);
+        i0[k] = gv_set1(g->f_integral[e]), fp1[k] = gv_set1(g->fprime1[e]), v[k] = gv_dot(ux, uy, uz, g->gvec[e]);
+        mx[k] = gv_set1(g->mu[e][0]), my[k] = gv_set1(g->mu[e][1]), mz[k] = gv_set1(g->mu[e][2]);
         /* [f' P_l]_0^T = f'(T) dP_l - I_0 P_l(a_e), since f'(T) - f'(0) = -I_0 */
-        gv i_lm1 = (v * gv_set1(g->gamma[e]) - (fp1 * da[k] - i0 * a[k])) * gv_set1(0.5); /* I_1 */
-        gv j_lm1 = i0, j_lm2 = gv_set1(0.0);                                              /* J_1, J_0 = 0 */
+        i_lm1[k] = (v[k] * gv_set1(g->gamma[e]) - (fp1[k] * da[k] - i0[k] * a[k])) * gv_set1(0.5); /* I_1 */
+        j_lm1[k] = i0[k], j_lm2[k] = gv_set1(0.0);                                                  /* J_1, J_0 = 0 */
         const int fresh = first && k == 0;
-        gv_accumulate(&gsum[0][0], mx * i0, fresh), gv_accumulate(&gsum[1][0], my * i0, fresh);
-        gv_accumulate(&gsum[2][0], mz * i0, fresh);
+        gv_accumulate(&gsum[0][0], mx[k] * i0[k], fresh), gv_accumulate(&gsum[1][0], my[k] * i0[k], fresh);
+        gv_accumulate(&gsum[2][0], mz[k] * i0[k], fresh);
         if (lmax >= 1) {
-            gv_accumulate(&gsum[0][1], mx * i_lm1, fresh), gv_accumulate(&gsum[1][1], my * i_lm1, fresh);
-            gv_accumulate(&gsum[2][1], mz * i_lm1, fresh);
+            gv_accumulate(&gsum[0][1], mx[k] * i_lm1[k], fresh), gv_accumulate(&gsum[1][1], my[k] * i_lm1[k], fresh);
+            gv_accumulate(&gsum[2][1], mz[k] * i_lm1[k], fresh);
         }
-        for (int l = 2; l <= lmax; ++l) {
-            const gv il = (v * dl[k][l] - j_lm1 - (fp1 * dpl[k][l] - i0 * pl[k][l])) * gv_set1(bc->inv_l[l + 1]);
-            const gv jl = gv_set1(bc->twol_m1[l]) * i_lm1 + j_lm2;
-            j_lm2 = j_lm1, j_lm1 = jl, i_lm1 = il;
-            gv_accumulate(&gsum[0][l], mx * il, fresh), gv_accumulate(&gsum[1][l], my * il, fresh);
-            gv_accumulate(&gsum[2][l], mz * il, fresh);
+    }
+    for (int l = 2; l <= lmax; ++l) {
+        const gv inv = gv_set1(bc->inv_l[l + 1]), tlm1 = gv_set1(bc->twol_m1[l]);
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            const gv il = (v[k] * dl[k][l] - j_lm1[k] - (fp1[k] * dpl[k][l] - i0[k] * pl[k][l])) * inv;
+            const gv jl = tlm1 * i_lm1[k] + j_lm2[k];
+            j_lm2[k] = j_lm1[k], j_lm1[k] = jl, i_lm1[k] = il;
+            const int fresh = first && k == 0;
+            gv_accumulate(&gsum[0][l], mx[k] * il, fresh), gv_accumulate(&gsum[1][l], my[k] * il, fresh);
+            gv_accumulate(&gsum[2][l], mz[k] * il, fresh);
         }
     }
 }
@@ -115,13 +130,13 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
                      double *zh_grad, double *zh4, double gscale, int area)
 {
     const int n = g->n, ndir = 2 * lmax + 1;
-    double t[3][GW];
-    for (int k = 0; k < GW; ++k)
-        for (int c = 0; c < 3; ++c) t[c][k] = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)][c];
-    gv ux, uy, uz;
-    memcpy(&ux, t[0], sizeof ux);
-    memcpy(&uy, t[1], sizeof uy);
-    memcpy(&uz, t[2], sizeof uz);
+    gv ux = gv_set1(0.0), uy = ux, uz = ux;
+    /* lanes set in registers (scalar stores reloaded as a vector stall store forwarding) */
+#pragma GCC unroll 8
+    for (int k = 0; k < GW; ++k) {
+        const double *u = shl__zh_dir[d0 + (k < cnt ? k : cnt - 1)];
+        ux[k] = u[0], uy[k] = u[1], uz[k] = u[2];
+    }
     gv bsum[SHL_LMAX_MAX + 1], surf[SHL_LMAX_MAX + 1], gsum[3][SHL_LMAX_MAX + 1];
     /* n = 0 (no polygon left, polygon.c: all sums 0) or n >= 3: groups of 3, of 2 where 2 or 4
      * are left; the first group starts the sums */
@@ -153,6 +168,17 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
             const gv kl = gv_set1(bc->norm[l]), kg = gv_set1(bc->norm[l] * gscale);
             const gv z = kl * surf[l], zx = kg * gsum[0][l], zy = kg * gsum[1][l], zz = kg * gsum[2][l]; /* Eq. 13 */
             double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
+#if GW == 4
+            if (cnt == 4) { /* a 4 x 4 transpose in two steps of two-vector shuffles (8 in all) */
+                const gv t0 = GV_SHUF(z, zx, 0, 4, 2, 6), t1 = GV_SHUF(z, zx, 1, 5, 3, 7);
+                const gv t2 = GV_SHUF(zy, zz, 0, 4, 2, 6), t3 = GV_SHUF(zy, zz, 1, 5, 3, 7);
+                const gv q0 = GV_SHUF(t0, t2, 0, 1, 4, 5), q1 = GV_SHUF(t1, t3, 0, 1, 4, 5);
+                const gv q2 = GV_SHUF(t0, t2, 2, 3, 6, 7), q3 = GV_SHUF(t1, t3, 2, 3, 6, 7);
+                memcpy(o, &q0, sizeof q0), memcpy(o + 4, &q1, sizeof q1);
+                memcpy(o + 8, &q2, sizeof q2), memcpy(o + 12, &q3, sizeof q3);
+                continue;
+            }
+#endif
             /* lane k of the 4 vectors side by side, k a constant after unrolling: a shuffle
              * in the registers (with k a variable, or through a stack array, gcc stored the
              * vectors and loaded them back in pieces, a fifth of this kernel's time) */
@@ -174,6 +200,7 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
 }
 
 #undef gv_block
+#undef GV_SHUF
 #undef gv_edges
 #undef gv_accumulate
 #undef gv_scatter
