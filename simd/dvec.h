@@ -51,6 +51,13 @@
 SHL__DVEC(2)
 #if defined(SHL_VDLEN) && SHL_VDLEN >= 4
 SHL__DVEC(4)
+/* lanes i, j, k, l of a and b's 8 (a's are 0-3, b's 4-7), in the registers */
+#ifdef __clang__
+#define dv4_shuffle(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+typedef long long shl__dv4_index __attribute__((vector_size(4 * sizeof(long long))));
+#define dv4_shuffle(a, b, i, j, k, l) __builtin_shuffle(a, b, (shl__dv4_index){i, j, k, l})
+#endif
 #endif
 #if defined(SHL_VDLEN) && SHL_VDLEN >= 8
 SHL__DVEC(8)

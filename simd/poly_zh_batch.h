@@ -63,14 +63,6 @@ typedef double zq __attribute__((vector_size(ZQ * sizeof(double))));
 #endif
 #define lv ZV_CAT(dv, LW)
 #define lv_set1 ZV_CAT(lv, _set1)
-#if LW == 4 /* lanes i, j, k, l of a and b's 8 */
-#ifdef __clang__
-#define LV_SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
-#else
-typedef long long lv_idx4 __attribute__((vector_size(4 * sizeof(long long))));
-#define LV_SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (lv_idx4){i, j, k, l})
-#endif
-#endif
 
 /* lanes p[k[0]], p[k[1]], ... (column c of rows k[0], ...), built in registers */
 #if LW == 4
@@ -151,10 +143,10 @@ static void zh_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
 #if LW == 4 /* ZQ 4 too */
             /* edge k's 4 terms are lane k of tb, tx, ty, tz: a 4 x 4 transpose in the registers
              * (lane reads of the vectors went through the stack: store-forwarding stalls) */
-            const lv t0 = LV_SHUF(tb, tx, 0, 4, 2, 6), t1 = LV_SHUF(tb, tx, 1, 5, 3, 7);
-            const lv t2 = LV_SHUF(ty, tz, 0, 4, 2, 6), t3 = LV_SHUF(ty, tz, 1, 5, 3, 7);
-            const lv q[4] = {LV_SHUF(t0, t2, 0, 1, 4, 5), LV_SHUF(t1, t3, 0, 1, 4, 5), LV_SHUF(t0, t2, 2, 3, 6, 7),
-                             LV_SHUF(t1, t3, 2, 3, 6, 7)};
+            const lv t0 = dv4_shuffle(tb, tx, 0, 4, 2, 6), t1 = dv4_shuffle(tb, tx, 1, 5, 3, 7);
+            const lv t2 = dv4_shuffle(ty, tz, 0, 4, 2, 6), t3 = dv4_shuffle(ty, tz, 1, 5, 3, 7);
+            const lv q[4] = {dv4_shuffle(t0, t2, 0, 1, 4, 5), dv4_shuffle(t1, t3, 0, 1, 4, 5), dv4_shuffle(t0, t2, 2, 3, 6, 7),
+                             dv4_shuffle(t1, t3, 2, 3, 6, 7)};
 #pragma GCC unroll 4
             for (int k = 0; k < LW; ++k) /* edges in order */
                 if (k < cnt) sum[l][0] += q[k];
@@ -252,7 +244,6 @@ static void cv_lobe(const shl__poly_geom *g, int lmax, int d, const shl__zh_band
     for (int l = 2; l <= lmax; ++l) surf[l] = bc->s_b[l] * bsum[l - 1] + bc->s_s[l] * surf[l - 2]; /* Eq. 29 */
     for (int l = 0; l <= lmax; ++l) zh[(ptrdiff_t)d * SHL__ZH_STRIDE + l] = bc->norm[l] * surf[l]; /* Eq. 13 */
 }
-#undef LV_SHUF
 #undef lv_set1
 #undef lv
 #undef LW

@@ -13,14 +13,6 @@
 #define gv_edges GV_CAT(gv_edges_, GW)
 #define gv_accumulate GV_CAT(gv_accumulate_, GW)
 #define gv_block GV_CAT(gv_block_, GW)
-#if GW == 4 /* lanes i, j, k, l of a and b's 8 */
-#ifdef __clang__
-#define GV_SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
-#else
-typedef long long gv_idx4 __attribute__((vector_size(4 * sizeof(long long))));
-#define GV_SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (gv_idx4){i, j, k, l})
-#endif
-#endif
 
 /* *sum += x; fresh: *sum = 0 + x (the sum's first term: no zeroing pass, and 0 + x keeps the
  * bits of adding x to a zeroed sum, -0 included) */
@@ -170,10 +162,10 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
             double *o = zh4 + 4 * ((ptrdiff_t)l * ndir + d0);
 #if GW == 4
             if (cnt == 4) { /* a 4 x 4 transpose in two steps of two-vector shuffles (8 in all) */
-                const gv t0 = GV_SHUF(z, zx, 0, 4, 2, 6), t1 = GV_SHUF(z, zx, 1, 5, 3, 7);
-                const gv t2 = GV_SHUF(zy, zz, 0, 4, 2, 6), t3 = GV_SHUF(zy, zz, 1, 5, 3, 7);
-                const gv q0 = GV_SHUF(t0, t2, 0, 1, 4, 5), q1 = GV_SHUF(t1, t3, 0, 1, 4, 5);
-                const gv q2 = GV_SHUF(t0, t2, 2, 3, 6, 7), q3 = GV_SHUF(t1, t3, 2, 3, 6, 7);
+                const gv t0 = dv4_shuffle(z, zx, 0, 4, 2, 6), t1 = dv4_shuffle(z, zx, 1, 5, 3, 7);
+                const gv t2 = dv4_shuffle(zy, zz, 0, 4, 2, 6), t3 = dv4_shuffle(zy, zz, 1, 5, 3, 7);
+                const gv q0 = dv4_shuffle(t0, t2, 0, 1, 4, 5), q1 = dv4_shuffle(t1, t3, 0, 1, 4, 5);
+                const gv q2 = dv4_shuffle(t0, t2, 2, 3, 6, 7), q3 = dv4_shuffle(t1, t3, 2, 3, 6, 7);
                 memcpy(o, &q0, sizeof q0), memcpy(o + 4, &q1, sizeof q1);
                 memcpy(o + 8, &q2, sizeof q2), memcpy(o + 12, &q3, sizeof q3);
                 continue;
@@ -200,7 +192,6 @@ static void gv_block(const shl__poly_geom *g, int lmax, int d0, int cnt, const s
 }
 
 #undef gv_block
-#undef GV_SHUF
 #undef gv_edges
 #undef gv_accumulate
 #undef gv_scatter
