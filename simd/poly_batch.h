@@ -54,6 +54,7 @@ static inline v3 v3_cross(v3 a, v3 b)
 static inline v3 v3_scale(v3 a, vf s) { return (v3){vf_mul(a.x, s), vf_mul(a.y, s), vf_mul(a.z, s)}; }
 static inline v3 v3_add(v3 a, v3 b) { return (v3){vf_add(a.x, b.x), vf_add(a.y, b.y), vf_add(a.z, b.z)}; }
 static inline v3 v3_set1(const float p[3]) { return (v3){vf_set1(p[0]), vf_set1(p[1]), vf_set1(p[2])}; }
+static inline v3 v3_sel(vm m, v3 a, v3 b) { return (v3){vf_sel(m, a.x, b.x), vf_sel(m, a.y, b.y), vf_sel(m, a.z, b.z)}; }
 
 /* atan2(y, x) per lane.  Reduction to t = lo/hi in [0, 1] (lo, hi = min, max of
  * |x|, |y|), then t > tan(pi/8) maps to (lo - hi)/(lo + hi) + pi/4, so one
@@ -223,7 +224,8 @@ static ALWAYS_INLINE vf geometry(const shl__batch_poly *P, work_t *w, const int 
         const v3 we = v3_load(GEO(w, e, F_WX));
         const vf r_e = vf_load(GEO(w, e, F_R)), r_f = vf_load(GEO(w, f, F_R));
         const vf ir_e = vf_load(GEO(w, e, F_IR)), ir_f = vf_load(GEO(w, f, F_IR));
-        const v3 c = v3_cross(rel_e, edge); /* = rel_e x rel_f without cancellation */
+        /* = rel_e x rel_f = rel_f x edge, from the nearer vertex (shl__poly_geom_init's cv) */
+        const v3 c = v3_cross(v3_sel(vf_lt(r_f, r_e), rel_f, rel_e), edge);
         const vf clen2 = v3_dot(c, c), clen = vf_sqrt(clen2), dot = v3_dot(rel_e, rel_f);
         const vf rr = vf_mul(r_e, r_f), irr = vf_mul(ir_e, ir_f), rsum = vf_add(r_e, r_f);
         /* |c|^2 + dot^2 = (r_e r_f)^2: sin, cos, and 1 - cos = sin^2 / (1 + cos) when cos > 0 */

@@ -24,7 +24,8 @@ typedef struct {
  * gamma_e = angle of edge e seen from x, atan2(|a x b|, a . b); u_e = a x b / |a x b|,
  * which for a polygon counter-clockwise about the direction of view (polygon.c
  * orientation) points into the polygon, so every term is >= 0 for a polygon
- * straight ahead.  a x b = a x (b - a) from the accurate edge vector. */
+ * straight ahead.  a x b = a x (b - a) = b x (b - a) from the accurate edge vector and the
+ * nearer vertex (polygon.c, shl__poly_geom_init). */
 static double lambert(const clip_poly *p, const double nrm[3])
 {
     double sum = 0.0;
@@ -32,7 +33,7 @@ static double lambert(const clip_poly *p, const double nrm[3])
         const int f = e + 1 == p->n ? 0 : e + 1;
         double edge[3], c[3];
         for (int k = 0; k < 3; ++k) edge[k] = p->off[f][k] - p->off[e][k];
-        shl__cross3(p->pos[e], edge, c);
+        shl__cross3(shl__norm3(p->pos[f]) < shl__norm3(p->pos[e]) ? p->pos[f] : p->pos[e], edge, c);
         const double clen = shl__norm3(c);
         if (!(clen > 0.0)) continue; /* zero arc: no contribution */
         const double gamma = atan2(clen, shl__dot3(p->pos[e], p->pos[f]));

@@ -187,11 +187,11 @@ static double solid_angle(const double (*rel)[3], const double *dist, const doub
     int npos = 0, nneg = 0;
     for (int i = 0; i < n; ++i) {
         const int j = (i + 1 == n) ? 0 : i + 1;
-        const double *ei = off[i], *ej = off[j];
+        const double *ei = off[i], *ej = off[j], si = s_i[i], sj = s_i[j];
         double c[3];
-        shl__cross3(ei, edges[i], c); /* e_i x e_j = e_i x (v_j - v_i) */
+        /* e_i x e_j = e_i x (v_j - v_i) = e_j x (v_j - v_i): from the shorter offset (as cv in geom_init) */
+        shl__cross3(si <= sj ? ei : ej, edges[i], c);
         const double num = shl__dot3(nrm, c), dot = shl__dot3(ei, ej), ri = dist[i], rj = dist[j];
-        const double si = s_i[i], sj = s_i[j];
         const double pair = dot >= 0.0 ? ri * rj + dot
                                        : (a * a * (a * a + si * si + sj * sj) + num * num) / (ri * rj - dot);
         const double den = pair + a * (ri + rj) + a * a;
@@ -346,7 +346,11 @@ static void geom_init(shl__poly_geom *g, const double x[3], const double *verts,
     double cv[SHL_MAX_VERTS][3], clen_e[SHL_MAX_VERTS], dotp_e[SHL_MAX_VERTS];
     for (int e = 0; e < m; ++e) {
         const int f = e + 1 == m ? 0 : e + 1;
-        shl__cross3(g->rel[e], edges[e], cv[e]); /* = rel_e x rel_f without cancellation */
+        /* rel_e x rel_f = rel_e x edge = rel_f x edge, the edge exact for nearby vertices: from the
+         * nearer vertex, the error is eps min(r_e, r_f) |edge|, i.e. eps min(r) / d_e relative (d_e the
+         * distance from x to the edge's line); from the farther one it was eps max(r) / d_e, all of c
+         * for x near the nearer vertex (fuzz_lights-far-edge-near-vertex-grad-inf: gamma pi, not pi/2) */
+        shl__cross3(g->dist[f] < g->dist[e] ? g->rel[f] : g->rel[e], edges[e], cv[e]);
         clen_e[e] = norm3(cv[e]);
         dotp_e[e] = shl__dot3(g->rel[e], g->rel[f]);
     }

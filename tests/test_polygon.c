@@ -418,6 +418,73 @@ SHL_TEST(hard_edge_subtending_nearly_pi)
     hard_case("edge arc ~pi (l<=30)", SHL_LMAX_MAX, x, unit_square, 4, 1e-10);
 }
 
+/* x within 2^-s of a vertex, the other vertices ~1 away: exact input, so the error is
+ * rounding, not conditioning.  s <= 45: the offset's height keeps x farther than the
+ * documented 8 eps x (largest vertex distance) from the plane, within which the result is
+ * 0.  Band 0 and band 1 against closed forms in long double: Omega by Van Oosterom-
+ * Strackee, the triple product as -z x the exact in-plane cross product (plane z = 0);
+ * int w dw = 1/2 sum_e gamma_e c_e / |c_e| (Arvo 1995) with c_e = rel_e x rel_f, whose
+ * relative error is ~2^-64 / sin(angle) at any distances (x is off every edge's line by
+ * >= |offset| / 4).  Bound: K_l 300 eps P (P = sum_e gamma_e, the boundary sums' rounding:
+ * fuzz_polygon.c) plus the reference's own rounding.  The library used to take rel_e x edge
+ * from the farther vertex: relative error eps r_far / d_e, ~2^(s-52) (4% at s = 45). */
+SHL_TEST(hard_point_near_vertex_exact_input)
+{
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(1, &ctx) == SHL_OK);
+    const double tri[9] = {0, 0, 0, 3.1, 1.3, 0, 0.7, 2.9, 0}; /* full-precision coordinates: products round */
+    const int offsets[4][3] = {{1, 1, 2}, {-2, 1, 1}, {1, -2, -3}, {-1, -1, -1}}, shifts[5] = {10, 20, 30, 40, 45};
+    const long double c1 = sqrtl(3.0L / (4.0L * M_PI)), k0 = 0.5L / sqrtl(M_PI);
+    double worst = 0.0;
+    int cases = 0;
+    for (int vk = 0; vk < 3; ++vk)
+        for (int o = 0; o < 4; ++o)
+            for (int si = 0; si < 5; ++si) {
+                double v[9], x[3], got[4];
+                for (int i = 0; i < 9; ++i) v[i] = tri[i] - tri[3 * vk + i % 3]; /* vertex vk at 0 */
+                for (int k = 0; k < 3; ++k) x[k] = ldexp(offsets[o][k], -shifts[si]);
+                CHECK(shl_polygon(ctx, x, v, 3, got) == SHL_OK);
+                long double rel[3][3], r[3], vec[3] = {0.0L, 0.0L, 0.0L}, perim = 0.0L;
+                for (int i = 0; i < 3; ++i) {
+                    for (int k = 0; k < 3; ++k) rel[i][k] = (long double)v[3 * i + k] - x[k];
+                    r[i] = sqrtl(rel[i][0] * rel[i][0] + rel[i][1] * rel[i][1] + rel[i][2] * rel[i][2]);
+                }
+                for (int e = 0; e < 3; ++e) {
+                    const long double *a = rel[e], *b = rel[(e + 1) % 3];
+                    const long double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+                    const long double cl = sqrtl(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+                    const long double gamma = atan2l(cl, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+                    perim += gamma;
+                    for (int k = 0; k < 3; ++k) vec[k] += 0.5L * gamma * c[k] / cl;
+                }
+                const long double cross2 = (long double)(v[3] - v[0]) * (v[7] - v[1]) - (long double)(v[4] - v[1]) * (v[6] - v[0]);
+                const long double d01 = rel[0][0] * rel[1][0] + rel[0][1] * rel[1][1] + rel[0][2] * rel[1][2];
+                const long double d02 = rel[0][0] * rel[2][0] + rel[0][1] * rel[2][1] + rel[0][2] * rel[2][2];
+                const long double d12 = rel[1][0] * rel[2][0] + rel[1][1] * rel[2][1] + rel[1][2] * rel[2][2];
+                const long double num = -(long double)x[2] * cross2;
+                const long double terms[4] = {r[0] * r[1] * r[2], d01 * r[2], d02 * r[1], d12 * r[0]};
+                const long double den = terms[0] + terms[1] + terms[2] + terms[3];
+                const long double omega = 2.0L * atan2l(num, den), sign = omega > 0.0L ? 1.0L : -1.0L;
+                long double mag = 0.0L;
+                for (int t = 0; t < 4; ++t) mag += fabsl(terms[t]);
+                /* den's rounding, ~4 ulps of its terms' magnitude sum, moves omega by 2 dden |num| / (num^2 + den^2) */
+                const long double ref_err = 8.0L * LDBL_EPSILON * (mag * fabsl(num) / (num * num + den * den) + 4.0L);
+                const long double want[4] = {k0 * fabsl(omega), -c1 * sign * vec[1], c1 * sign * vec[2], -c1 * sign * vec[0]};
+                for (int k = 0; k < 4; ++k) {
+                    const long double kl = k ? c1 : k0, tol = kl * (300.0L * DBL_EPSILON * perim + ref_err);
+                    const long double err = fabsl(got[k] - want[k]);
+                    if (!(err <= tol))
+                        harness_fail(__FILE__, __LINE__, "vertex %d offset %d 2^-%d coefficient %d: error %.3Lg > %.3Lg", vk,
+                                     o, shifts[si], k, err, tol);
+                    worst = fmax(worst, (double)(err / (kl * DBL_EPSILON * perim)));
+                }
+                ++cases;
+            }
+    harness_note("%d points 2^-10..2^-45 from a vertex: bands 0-1 vs closed forms, max error %.2g eps K_l P (bound 300)",
+                 cases, worst);
+    shl_ctx_destroy(ctx);
+}
+
 SHL_TEST(hard_lmax_max_concave)
 {
     const double star[18] = {1, 0, 2, 0.2, 0.3, 2, 0, 1, 2, -0.3, 0.1, 2, -1, -1, 2, 0.1, -0.2, 2};
