@@ -672,7 +672,13 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
                     vf_store(w.u + r * VL, vf_mul(vf_load(w.u + r * VL), vf_set1(gs1)));
                     vf_store(w.v + r * VL, vf_mul(vf_load(w.v + r * VL), vf_set1(gs1)));
                 }
-            acc_light(&w, lmax, s, a, nq);
+            /* lanes not accumulated (masked, or redone by the caller) add 0 x (their zeros), not
+             * rgb x 0: an rgb beyond float range is inf, and inf x 0 = NaN made a point's result
+             * depend on its batch (fuzz_lights-masked-lane-inf-rgb-nan) */
+            const vm used = vf_gt(vf_load(w.lane + 4 * VL), vf_set1(0.0f));
+            const vf s_used[3] = {vf_sel(used, s[0], vf_set1(0.0f)), vf_sel(used, s[1], vf_set1(0.0f)),
+                                  vf_sel(used, s[2], vf_set1(0.0f))};
+            acc_light(&w, lmax, s_used, a, nq);
             continue;
         }
         reconstruct(&w, lmax, with_grad ? 4 : 1);
@@ -728,7 +734,10 @@ void ISA(shl__poly_acc_finish)(int lmax, int npts, const float *acc, int add, fl
                         if (k) vf_store(w.v + (((size_t)q * L + k) * L + l) * VL, vf_load(a + acc_v(L, l, k) * VL));
                     }
             reconstruct(&w, lmax, nq);
-            if (!add) {
+            if (!add) { /* stored as 0 + x, as the add path does, so that a -0 is +0 either way: the
+                         * caller adds when some other point of the block needed it */
+                for (size_t r = 0; r < (size_t)nq * nc; ++r)
+                    vf_store(w.soa + r * VL, vf_add(vf_set1(0.0f), vf_load(w.soa + r * VL)));
                 store_rows(w.soa, nc, y + (size_t)c * nc, rgb_stride, nvalid);
                 if (g) store_rows(w.soa + (size_t)nc * VL, 3 * nc, g + (size_t)c * 3 * nc, grad_stride, nvalid);
                 continue;
