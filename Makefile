@@ -281,26 +281,29 @@ clean:
 # linked with the library objects built with the same sanitizers and the allocation
 # hooks (in $(BUILD)/fuzz), then runs each target for FUZZ_SECONDS seconds from its
 # committed seed corpus tests/fuzz/corpus/<target>/; with FUZZ_RUNS, N inputs per target
-# from the fixed seed FUZZ_SEED instead (deterministic: what CI runs).  New inputs go to
-# $(BUILD)/fuzz/corpus/<target>/, failing inputs to $(BUILD)/fuzz/artifacts/, the
-# full log to $(BUILD)/fuzz/<target>.log.  Every target runs even if an earlier one
+# from the fixed seed FUZZ_SEED instead, deterministic (what CI runs): from an empty
+# $(BUILD)/fuzz/corpus/<target>/ and with -use_cmp=0 (the compare dictionary picked up
+# heap addresses), and the fuzz build runs the thread pool's rounds serially
+# (SHL_SERIAL_POOL, src/parallel.c); before both, two runs of seed 1 found different
+# inputs (tests/fuzz/README.md).  New inputs go to $(BUILD)/fuzz/corpus/<target>/,
+# failing inputs to $(BUILD)/fuzz/artifacts/, the full log to $(BUILD)/fuzz/<target>.log.  Every target runs even if an earlier one
 # fails; make fails if any did.
 FUZZ_SECONDS ?= 60
 FUZZ_CC      ?= clang
 FUZZ_FLAGS   ?=
 FUZZ_RUNS    ?=
 FUZZ_SEED    ?= 1
-FUZZ_LIMIT   := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED),-max_total_time=$(FUZZ_SECONDS))
+FUZZ_LIMIT   := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED) -use_cmp=0,-max_total_time=$(FUZZ_SECONDS))
 FUZZ_TARGETS ?= $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_DIR     := $(BUILD)/fuzz
 ifeq ($(SANITIZE),fuzzer)
   CFLAGS_ALL += -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all \
-                -fno-omit-frame-pointer -g -DSHL_ALLOC_HOOKS
+                -fno-omit-frame-pointer -g -DSHL_ALLOC_HOOKS -DSHL_SERIAL_POOL
 endif
 .PHONY: fuzz fuzz-build fuzz-bins fuzz-repro stress
 fuzz: fuzz-build
 	@fail=""; for t in $(FUZZ_TARGETS); do \
-	  mkdir -p $(FUZZ_DIR)/corpus/$$t $(FUZZ_DIR)/artifacts; \
+	  $(if $(FUZZ_RUNS),rm -rf $(FUZZ_DIR)/corpus/$$t;) mkdir -p $(FUZZ_DIR)/corpus/$$t $(FUZZ_DIR)/artifacts; \
 	  echo "== $$t: $(FUZZ_LIMIT) from tests/fuzz/corpus/$$t"; \
 	  $(FUZZ_DIR)/tests/fuzz/$$t $(FUZZ_LIMIT) -timeout=60 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_DIR)/artifacts/$$t- $(FUZZ_FLAGS) \

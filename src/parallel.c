@@ -23,22 +23,45 @@ typedef struct {
     void *arg;
 } loop;
 
+/* Claims the next chunk [*begin, p->next); 0 when none is left (caller holds p->lock). */
+static int claim_chunk(loop *p, long *begin)
+{
+    const long left = p->n - p->next;
+    *begin = p->next;
+    if (left <= 0) return 0;
+    const long want = p->split ? left / p->split / p->grain * p->grain : 0; /* a multiple of grain */
+    const long size = want > p->grain ? want : p->grain;
+    p->next += left < size ? left : size;
+    return 1;
+}
+
 static void run_chunks(loop *p, int worker)
 {
     for (;;) {
+        long begin;
         pthread_mutex_lock(&p->lock);
-        const long begin = p->next, left = p->n - begin;
-        if (begin < p->n) {
-            const long want = p->split ? left / p->split / p->grain * p->grain : 0; /* a multiple of grain */
-            const long size = want > p->grain ? want : p->grain;
-            p->next = begin + (left < size ? left : size);
-        }
+        const int more = claim_chunk(p, &begin);
         const long end = p->next;
         pthread_mutex_unlock(&p->lock);
-        if (begin >= p->n) return;
+        if (!more) return;
         p->fn(p->arg, worker, begin, end);
     }
 }
+
+#ifdef SHL_SERIAL_POOL
+/* Fuzz builds (Makefile, SANITIZE=fuzzer): a round's chunks run one after the other on the
+ * calling thread, chunk k as worker k mod nw.  Coverage counters bumped by racing threads,
+ * and chunks taken in timing order, made the same fixed-seed fuzz run find different inputs
+ * from one run to the next; the results contract (independent of the worker that runs a
+ * chunk) is the same, and the threaded pool is tested by make test and ThreadSanitizer. */
+static int serial_round(long n, long grain, int nw, int guided, shl__range_fn fn, void *arg)
+{
+    loop p = {.next = 0, .n = n, .grain = grain, .split = guided ? 4L * nw : 0, .fn = fn, .arg = arg};
+    long begin;
+    for (int k = 0; claim_chunk(&p, &begin); k = (k + 1) % nw) fn(arg, k, begin, p.next);
+    return SHL_OK;
+}
+#endif
 
 /* The pool, under pool_lock.  One call at a time owns it (busy); the owner alone
  * creates workers and changes size.  Worker w (1 <= w <= size) takes part in a
@@ -132,6 +155,9 @@ int shl__parallel_workers(long n, long grain, int nthreads)
 static int parallel_run(long n, long grain, int nthreads, int guided, shl__range_fn fn, void *arg)
 {
     const int nw = shl__parallel_workers(n, grain, nthreads);
+#ifdef SHL_SERIAL_POOL
+    if (nw > 1) return serial_round(n, grain, nw, guided, fn, arg);
+#endif
     int own = 0; /* 0 with one worker, or while a call on another thread (or from a worker) owns the pool */
     if (nw > 1) {
         pthread_mutex_lock(&pool_lock);
