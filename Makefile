@@ -282,8 +282,9 @@ clean:
 # hooks (in $(BUILD)/fuzz), then runs each target for FUZZ_SECONDS seconds from its
 # committed seed corpus tests/fuzz/corpus/<target>/; with FUZZ_RUNS, N inputs per target
 # from the fixed seed FUZZ_SEED instead, deterministic (what CI runs): from an empty
-# $(BUILD)/fuzz/corpus/<target>/ and with -use_cmp=0 (the compare dictionary picked up
-# heap addresses), and the fuzz build runs the thread pool's rounds serially
+# $(BUILD)/fuzz/corpus/<target>/, with -use_cmp=0 (the compare dictionary picked up heap
+# addresses) and -reload=0 (the once-a-second re-read of the output corpus ran an extra
+# input at a time-dependent point), and the fuzz build runs the thread pool's rounds serially
 # (SHL_SERIAL_POOL, src/parallel.c); before both, two runs of seed 1 found different
 # inputs (tests/fuzz/README.md).  New inputs go to $(BUILD)/fuzz/corpus/<target>/,
 # failing inputs to $(BUILD)/fuzz/artifacts/, the full log to $(BUILD)/fuzz/<target>.log.  Every target runs even if an earlier one
@@ -293,7 +294,7 @@ FUZZ_CC      ?= clang
 FUZZ_FLAGS   ?=
 FUZZ_RUNS    ?=
 FUZZ_SEED    ?= 1
-FUZZ_LIMIT   := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED) -use_cmp=0,-max_total_time=$(FUZZ_SECONDS))
+FUZZ_LIMIT   := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED) -use_cmp=0 -reload=0,-max_total_time=$(FUZZ_SECONDS))
 FUZZ_TARGETS ?= $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_DIR     := $(BUILD)/fuzz
 ifeq ($(SANITIZE),fuzzer)
