@@ -285,10 +285,10 @@ clean:
 # $(BUILD)/fuzz/corpus/<target>/, with -use_cmp=0 (the compare dictionary picked up heap
 # addresses) and -reload=0 (the once-a-second re-read of the output corpus ran an extra
 # input at a time-dependent point), and the fuzz build runs the thread pool's rounds serially
-# (SHL_SERIAL_POOL, src/parallel.c); before both, two runs of seed 1 found different
+# (SHL_SERIAL_POOL, src/parallel.c); before these, two runs of seed 1 found different
 # inputs (tests/fuzz/README.md).  New inputs go to $(BUILD)/fuzz/corpus/<target>/,
-# failing inputs to $(BUILD)/fuzz/artifacts/, the full log to $(BUILD)/fuzz/<target>.log.  Every target runs even if an earlier one
-# fails; make fails if any did.
+# failing inputs to $(BUILD)/fuzz/artifacts/, the full log to $(BUILD)/fuzz/<target>.log.
+# Every target runs even if an earlier one fails; make fails if any did.
 FUZZ_SECONDS ?= 60
 FUZZ_CC      ?= clang
 FUZZ_FLAGS   ?=
