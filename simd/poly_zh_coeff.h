@@ -21,6 +21,18 @@ __attribute__((always_inline)) static inline void cv_edges(const shl__poly_geom 
                                                            cv *bsum)
 {
     enum { GMAX = 3 };
+    if (lmax <= 2) { /* B_0, B_1 only: a_e, b_e, c_e of Eq. 20, none of the recurrences' inputs */
+#pragma GCC unroll 3
+        for (int k = 0; k < G; ++k) {
+            const int e = e0 + k;
+            const cv gamma = cv_set1(g->gamma[e]), c = cv_dot(ux, uy, uz, g->mu[e]);
+            bsum[0] += c * gamma;
+            if (lmax == 2)
+                bsum[1] += c * (cv_dot(ux, uy, uz, g->w[e]) * cv_set1(g->sin_gamma[e]) +
+                                cv_dot(ux, uy, uz, g->lam[e]) * cv_set1(g->omc_gamma[e])); /* B_1, Eq. 27 */
+        }
+        return;
+    }
     cv a[GMAX], c[GMAX], af[GMAX], c2[GMAX], s[GMAX], b1[GMAX], da[GMAX];
     cv p_lm1[GMAX], p_lm2[GMAX], dp_lm1[GMAX], dp_lm2[GMAX], b_lm1[GMAX], b_lm2[GMAX], d_lm1[GMAX], d_lm2[GMAX];
 #pragma GCC unroll 3
