@@ -6,9 +6,9 @@
  *  - speed-up over a frozen copy of the issue-16 kernels (bench/common/poly_baseline.c),
  *  - gradient cost: shl_polygon_grad / shl_polygon, whole call and ZH part (Wu 2020 Table 1),
  *    and central differences (7 shl_polygon calls: the coefficients and 6 offsets) /
- *    shl_polygon_grad, in paired rounds on thread CPU time,
+ *    shl_polygon_grad,
  *  - scalar evaluations per second per core (the SIMD baseline).
- * All ratios come from one run.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
+ * All ratios come from one run; those of the last three sections from paired rounds on thread CPU time.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
  * CSV rows "lmax": ns_zh = set-up + ZH recurrence as shl_polygon runs them, ns_rotation the
  * reconstruction (the whole call minus those); "grad": ns_total and ns_zh of the gradient
  * calls; "baseline": ns_total of shl_polygon, ns_zh of the frozen baseline pipeline;
@@ -162,20 +162,6 @@ static double timed(void (*fn)(void *), job *j)
     return bench_run(fn, j, j->inner, 7).median;
 }
 
-/* Ratio t(slow) / t(fast) as the median over nr <= 5 interleaved rounds (robust under load). */
-static double ratio_rounds(int nr, void (*slow)(void *), void (*fast)(void *), job *j, double *t_slow, double *t_fast)
-{
-    double rs[5], ts[5], tf[5];
-    for (int r = 0; r < nr; ++r) {
-        ts[r] = timed(slow, j);
-        tf[r] = timed(fast, j);
-        rs[r] = ts[r] / tf[r];
-    }
-    *t_slow = bench_median(ts, nr);
-    *t_fast = bench_median(tf, nr);
-    return bench_median(rs, nr);
-}
-
 /* The gradient section's clock: thread CPU time, so time the thread spends descheduled on a
  * loaded host is not counted (wall-clock repetitions of one function taken hundreds of ms after
  * another's made its shl_polygon time disagree with the other sections' by 1.7x). */
@@ -220,6 +206,22 @@ static double round_ratio(double t[][PAIR_ROUNDS], int a, int b, double *lo, dou
     const double med = bench_median(q, PAIR_ROUNDS); /* sorts q */
     *lo = q[0], *hi = q[PAIR_ROUNDS - 1];
     return med;
+}
+
+/* t(slow) / t(fast) in PAIR_ROUNDS paired rounds: the median of the per-round ratios (range in lo,
+ * hi), the times the medians over the rounds.  Each round's two times are taken ~20 ms apart on
+ * thread CPU time: on a noisy host, medians of 7 wall-clock repetitions taken ~150 ms apart moved
+ * this section's ratios by 0.9-1.4x between runs (bench/RESULTS.md). */
+static double paired_ratio(void (*slow)(void *), void (*fast)(void *), job *j, double *t_slow, double *t_fast,
+                           double *lo, double *hi)
+{
+    void (*const fns[2])(void *) = {slow, fast};
+    double t[2][PAIR_ROUNDS];
+    paired_rounds(2, fns, j, t);
+    const double r = round_ratio(t, 0, 1, lo, hi);
+    *t_slow = bench_median(t[0], PAIR_ROUNDS);
+    *t_fast = bench_median(t[1], PAIR_ROUNDS);
+    return r;
 }
 
 static void setup(job *j, const shl_ctx *ctx, int n)
@@ -315,19 +317,20 @@ int main(int argc, char **argv)
     printf("\nFitted exponent of time vs edges: %.2f (1 = linear)\n", bench_loglog_slope(xs, ys, ne));
 
     bench_progress("speed-up over the frozen issue-16 kernels (step 3/6)...");
-    printf("\n## shl_polygon vs the frozen issue-16 kernels (triangle, double; median of 5 interleaved rounds)\n\n");
+    printf("\n## shl_polygon vs the frozen issue-16 kernels (triangle, double; %d paired rounds, thread CPU time)\n\n",
+           PAIR_ROUNDS);
     printf("Baseline: bench/common/poly_baseline.c (one lobe at a time, row-by-row reconstruction) after the\n"
            "library's current set-up (shl__poly_geom_init is shared, so set-up gains are not in the ratio).\n"
            "Target (issue 16): >= 2.5x at lmax 8.  ISA: %s.\n\n", shl_ctx_isa(ctx8));
-    printf("| lmax | baseline ns | shl_polygon ns | speed-up |\n|---|---|---|---|\n");
+    printf("| lmax | baseline ns | shl_polygon ns | speed-up (range over the rounds) |\n|---|---|---|---|\n");
     const int base_l[4] = {4, 8, 14, 30};
     for (int i = 0; i < 4; ++i) {
         shl_ctx *ctx;
         shl_ctx_create(base_l[i], &ctx);
         setup(&j, ctx, 3);
-        double tb, tc;
-        const double r = ratio_rounds(5, run_baseline_full, run_full, &j, &tb, &tc);
-        printf("| %d | %.0f | %.0f | %.2fx |\n", base_l[i], tb * 1e9, tc * 1e9, r);
+        double tb, tc, lo, hi;
+        const double r = paired_ratio(run_baseline_full, run_full, &j, &tb, &tc, &lo, &hi);
+        printf("| %d | %.0f | %.0f | %.2fx (%.2f-%.2f) |\n", base_l[i], tb * 1e9, tc * 1e9, r, lo, hi);
         if (csv) fprintf(csv, "baseline,%d,3,%.1f,%.1f,,\n", base_l[i], tc * 1e9, tb * 1e9);
         shl_ctx_destroy(ctx);
     }
@@ -336,8 +339,10 @@ int main(int argc, char **argv)
     printf("\n## ZH recurrence vs monomial-moment baseline (triangle; Wang 2018 Table 2)\n\n");
     printf("Equal care: both run two lobes per vector (the generic vector type, SSE2 on x86-64), the\n"
            "recurrence as the scalar ISA's kernel of simd/poly_zh_batch.h, the monomial method as\n"
-           "bench/common/monomial.c; ZH part only, geometry precomputed; median of 3 interleaved rounds.\n"
-           "The context's ISA kernel (shl_polygon's) is shown for reference.  Target: ratio >= 1 at every lmax.\n\n");
+           "bench/common/monomial.c; ZH part only, geometry precomputed; median of the per-round ratios of %d\n"
+           "paired rounds on thread CPU time (range in brackets).\n"
+           "The context's ISA kernel (shl_polygon's) is shown for reference.  Target: ratio >= 1 at every lmax.\n\n",
+           PAIR_ROUNDS);
     printf("| lmax | recurrence ns | monomial ns | monomial/recurrence | %s kernel ns | max |recurrence - monomial| |\n"
            "|---|---|---|---|---|---|\n", shl_ctx_isa(ctx8));
     double worst = HUGE_VAL;
@@ -345,8 +350,8 @@ int main(int argc, char **argv)
         shl_ctx *ctx;
         shl_ctx_create(lm, &ctx);
         setup(&j, ctx, 3);
-        double tm, tz;
-        const double r = ratio_rounds(3, run_monomial_only, run_zh_only, &j, &tm, &tz);
+        double tm, tz, lo, hi;
+        const double r = paired_ratio(run_monomial_only, run_zh_only, &j, &tm, &tz, &lo, &hi);
         const double ti = timed(run_zh_isa, &j);
         worst = fmin(worst, r);
         static double za[(2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE], zb[(2 * SHL_LMAX_MAX + 1) * SHL__ZH_STRIDE];
@@ -357,7 +362,7 @@ int main(int argc, char **argv)
             for (int d = 0; d < 2 * lm + 1; ++d)
                 for (int l = 0; l <= lm; ++l) diff = fmax(diff, fabs(za[d * SHL__ZH_STRIDE + l] - zb[d * SHL__ZH_STRIDE + l]));
         }
-        printf("| %d | %.0f | %.0f | %.2fx | %.0f | %.1e |\n", lm, tz * 1e9, tm * 1e9, r, ti * 1e9, diff);
+        printf("| %d | %.0f | %.0f | %.2fx (%.2f-%.2f) | %.0f | %.1e |\n", lm, tz * 1e9, tm * 1e9, r, lo, hi, ti * 1e9, diff);
         if (csv) fprintf(csv, "zhmono,%d,3,,%.1f,%.1f,%.1f\n", lm, tz * 1e9, ti * 1e9, tm * 1e9);
         shl_ctx_destroy(ctx);
     }
