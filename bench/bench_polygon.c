@@ -8,7 +8,8 @@
  *    and central differences (7 shl_polygon calls: the coefficients and 6 offsets) /
  *    shl_polygon_grad,
  *  - scalar evaluations per second per core (the SIMD baseline).
- * All ratios come from one run; those of the last three sections from paired rounds on thread CPU time.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
+ * All ratios come from one run; the frozen-kernel, monomial and gradient sections' from paired
+ * rounds on thread CPU time.  CSV: build/bench/bench_polygon.csv (-o overrides); --help.
  * CSV rows "lmax": ns_zh = set-up + ZH recurrence as shl_polygon runs them, ns_rotation the
  * reconstruction (the whole call minus those); "grad": ns_total and ns_zh of the gradient
  * calls; "baseline": ns_total of shl_polygon, ns_zh of the frozen baseline pipeline;
@@ -210,8 +211,8 @@ static double round_ratio(double t[][PAIR_ROUNDS], int a, int b, double *lo, dou
 
 /* t(slow) / t(fast) in PAIR_ROUNDS paired rounds: the median of the per-round ratios (range in lo,
  * hi), the times the medians over the rounds.  Each round's two times are taken ~20 ms apart on
- * thread CPU time: on a noisy host, medians of 7 wall-clock repetitions taken ~150 ms apart moved
- * this section's ratios by 0.9-1.4x between runs (bench/RESULTS.md). */
+ * thread CPU time: on a noisy host, medians of 7 wall-clock repetitions taken ~150 ms apart gave
+ * monomial/recurrence ratios of 0.74-1.40x at lmax 2-5 over six runs (bench/RESULTS.md). */
 static double paired_ratio(void (*slow)(void *), void (*fast)(void *), job *j, double *t_slow, double *t_fast,
                            double *lo, double *hi)
 {
