@@ -336,20 +336,25 @@ static ALWAYS_INLINE void edge_init(edge_state *st, const work_t *w, int L, int 
     }
 }
 
-/* Band l >= 2 of one lobe on one edge. */
+/* Band l >= 2 of one lobe on one edge; B_l only with band_b (S_lmax reads B_lmax-1 at most,
+ * so band lmax, run for the gradient's I_lmax alone, skips it). */
 static ALWAYS_INLINE void edge_step(edge_state *st, const work_t *w, int L, int j, int e, int l, vf fp1, vf i0,
-                                    const int first, const int grad)
+                                    const int first, const int grad, const int band_b)
 {
-    /* Eq. 30-31 merged: B_l = alpha (B_1 P_l-1 + s dP_l-1 - c^2 D_l-1) + beta B_l-2,
-     * alpha = (2l-1)/l^2, beta = ((l-1)/l)^2 */
-    const vf xx = vf_fnma(st->c2, st->dm1, vf_fma(st->s, st->dp1, vf_mul(st->b1c, st->p1)));
-    const vf bl = vf_fma(KV(w, l, K_ALPHA), xx, vf_mul(KV(w, l, K_BETA), st->bm2));
     const vf dl = vf_fma(KV(w, l, K_2LM1), st->bm1, st->dm2); /* Eq. 32 */
     /* Legendre (Eq. 11) at a_e, and its difference along the arc:
      * a_f P(a_f) - a_e P(a_e) = a_f dP + da P(a_e) */
     const vf pl = vf_fms(KV(w, l, K_A), vf_mul(st->ae, st->p1), vf_mul(KV(w, l, K_B), st->p2));
     const vf dpl = vf_fms(KV(w, l, K_A), vf_fma(st->af, st->dp1, vf_mul(st->da, st->p1)), vf_mul(KV(w, l, K_B), st->dp2));
-    acc_add(ACC(w, L, j, l), st->ce, bl, first); /* Eq. 14 */
+    if (band_b) {
+        /* Eq. 30-31 merged: B_l = alpha (B_1 P_l-1 + s dP_l-1 - c^2 D_l-1) + beta B_l-2,
+         * alpha = (2l-1)/l^2, beta = ((l-1)/l)^2 */
+        const vf xx = vf_fnma(st->c2, st->dm1, vf_fma(st->s, st->dp1, vf_mul(st->b1c, st->p1)));
+        const vf bl = vf_fma(KV(w, l, K_ALPHA), xx, vf_mul(KV(w, l, K_BETA), st->bm2));
+        acc_add(ACC(w, L, j, l), st->ce, bl, first); /* Eq. 14 */
+        st->bm2 = st->bm1;
+        st->bm1 = bl;
+    }
     if (grad) {
         /* I_l = (V D_l - J_l-1 - [f' P_l]) / (l+1), J_l = (2l-1) I_l-1 + J_l-2 */
         const vf il = vf_mul(vf_sub(vf_fms(st->v, dl, st->j1), vf_fnma(i0, pl, vf_mul(fp1, dpl))), KV(w, l, K_INV1));
@@ -363,8 +368,6 @@ static ALWAYS_INLINE void edge_step(edge_state *st, const work_t *w, int L, int 
     st->p1 = pl;
     st->dp2 = st->dp1;
     st->dp1 = dpl;
-    st->bm2 = st->bm1;
-    st->bm1 = bl;
     st->dm2 = st->dm1;
     st->dm1 = dl;
 }
@@ -391,13 +394,13 @@ static ALWAYS_INLINE void lobes_edge(const work_t *w, int n, int lmax, int e, co
         fp1 = vf_load(GEO(w, e, F_FP1));
         i0 = vf_load(GEO(w, e, F_I0));
     }
-    const int lend = grad ? lmax : lmax - 1; /* S_lmax needs B_lmax-1; I_lmax needs D, P, dP at lmax */
     for (int j = 0; j < nl; ++j) { /* one lobe at a time: the state fits the registers */
         edge_state st;
         st.v = v[j];
         edge_init(&st, w, L, j, e, vf_load(w->avtx + (2 * e + j) * VL), vf_load(w->avtx + (2 * f + j) * VL), be[j],
                   ce[j], da[j], fp1, i0, first, grad);
-        for (int l = 2; l <= lend; ++l) edge_step(&st, w, L, j, e, l, fp1, i0, first, grad);
+        for (int l = 2; l < lmax; ++l) edge_step(&st, w, L, j, e, l, fp1, i0, first, grad, 1);
+        if (grad && lmax >= 2) edge_step(&st, w, L, j, e, lmax, fp1, i0, first, grad, 0); /* I_lmax: D, P, dP at lmax */
     }
 }
 
@@ -409,13 +412,24 @@ static inline vf grad_sum(const work_t *w, int n, int L, int j, int a, int l)
     return sum;
 }
 
+/* Light sets (src/lights_batch.c): the ZH -> SH reconstruction is linear, so the
+ * lights' paired sums u and differences v (times each light's rgb) are accumulated
+ * per group of VL points and colour, and reconstructed once per block (as
+ * shl__lights_eval does in double).  Compact layout per group, colour and quantity
+ * q: u_k(l) at l(l+1)/2 + k (0 <= k <= l), v_k(l) at L(L+1)/2 + l(l-1)/2 + k - 1
+ * (1 <= k <= l): nc vectors. */
+static ALWAYS_INLINE size_t acc_u(int l, int k) { return (size_t)(l * (l + 1) / 2 + k); }
+static ALWAYS_INLINE size_t acc_v(int L, int l, int k) { return (size_t)(L * (L + 1) / 2 + l * (l - 1) / 2 + k - 1); }
+
 /* ZH integrals of lobe pair k (two = 1: lobes 2k-1 = dir and 2k = its mirror
  * image) or of lobe 0 (two = 0), bands 0..lmax: S_l (Eq. 29) and, with grad,
  * sum_e mu_e I_l,e, scaled by sign * K_l (fs; fsg for gradients) and stored as
- * the pair's sum u and difference v (zh_tables.h; lobe 0: u only). */
+ * the pair's sum u and difference v (zh_tables.h; lobe 0: u only): in w->u, w->v
+ * for the reconstruction, or (to_acc) in w->soa in the accumulators' compact
+ * layout, so that acc_light streams them. */
 static ALWAYS_INLINE void lobes_zh(const shl__batch_poly *P, work_t *w, int lmax, int k, const float dir[3],
                                    vf omega, vf fs, vf fsg, const float *s_b, const float *s_s, const float *norm,
-                                   const int two, const int grad)
+                                   const int two, const int grad, const int to_acc)
 {
     const int n = P->n, L = lmax + 1, nq = grad ? 4 : 1, nl = two ? 2 : 1;
     for (int i = 0; i < n; ++i) {
@@ -438,11 +452,13 @@ static ALWAYS_INLINE void lobes_zh(const shl__batch_poly *P, work_t *w, int lmax
         for (int l = k; l <= lmax; ++l) { /* band l uses pairs k <= l */
             const vf scale = vf_mul(q ? fsg : fs, vf_set1(norm[l]));
             const vf z0 = vf_mul(scale, q ? grad_sum(w, n, L, 0, q - 1, l) : S[0][l]);
-            float *u = w->u + (((size_t)q * L + k) * L + l) * VL;
+            const size_t qc = (size_t)q * L * L;
+            float *u = to_acc ? w->soa + (qc + acc_u(l, k)) * VL : w->u + (((size_t)q * L + k) * L + l) * VL;
             if (two) {
                 const vf z1 = vf_mul(scale, q ? grad_sum(w, n, L, 1, q - 1, l) : S[1][l]);
                 vf_store(u, vf_add(z0, z1));
-                vf_store(w->v + (((size_t)q * L + k) * L + l) * VL, vf_sub(z0, z1));
+                vf_store(to_acc ? w->soa + (qc + acc_v(L, l, k)) * VL : w->v + (((size_t)q * L + k) * L + l) * VL,
+                         vf_sub(z0, z1));
             } else {
                 vf_store(u, z0);
             }
@@ -590,39 +606,18 @@ static void store_rows(const float *soa, int nrows, float *out, size_t stride, i
         for (int j = 0; j < nvalid; ++j) out[j * stride + k] = soa[(size_t)k * VL + j];
 }
 
-/* Light sets (src/lights_batch.c): the ZH -> SH reconstruction is linear, so the
- * lights' paired sums u and differences v (times each light's rgb) are accumulated
- * per group of VL points and colour, and reconstructed once per block (as
- * shl__lights_eval does in double).  Compact layout per group, colour and quantity
- * q: u_k(l) at l(l+1)/2 + k (0 <= k <= l), v_k(l) at L(L+1)/2 + l(l-1)/2 + k - 1
- * (1 <= k <= l): nc vectors. */
-static ALWAYS_INLINE size_t acc_u(int l, int k) { return (size_t)(l * (l + 1) / 2 + k); }
-static ALWAYS_INLINE size_t acc_v(int L, int l, int k) { return (size_t)(L * (L + 1) / 2 + l * (l - 1) / 2 + k - 1); }
-
 size_t ISA(shl__poly_acc_floats)(int lmax, int with_grad, int npts)
 {
     const size_t nc = SHL_NCOEFFS(lmax), nq = with_grad ? 4 : 1, groups = ((size_t)npts + VL - 1) / VL;
     return (3 * groups + 1) * nq * nc * VL; /* + one group's rows, point by point (acc_finish) */
 }
 
-/* acc[c] += s[c] (u, v) of the light just evaluated (w->u, w->v), one group. */
+/* acc[c] += s[c] (u, v) of the light just evaluated (w->soa, compact layout), one group. */
 static ALWAYS_INLINE void acc_light(const work_t *w, int lmax, const vf s[3], float *acc, const int nq)
 {
-    const int L = lmax + 1, nc = L * L;
-    for (int q = 0; q < nq; ++q)
-        for (int l = 0; l <= lmax; ++l)
-            for (int k = 0; k <= l; ++k) {
-                const vf u = vf_load(w->u + (((size_t)q * L + k) * L + l) * VL);
-                const vf v = k ? vf_load(w->v + (((size_t)q * L + k) * L + l) * VL) : u;
-                for (int c = 0; c < 3; ++c) {
-                    float *a = acc + ((size_t)(c * nq + q) * nc + acc_u(l, k)) * VL;
-                    vf_store(a, vf_fma(s[c], u, vf_load(a)));
-                    if (k) {
-                        float *b = acc + ((size_t)(c * nq + q) * nc + acc_v(L, l, k)) * VL;
-                        vf_store(b, vf_fma(s[c], v, vf_load(b)));
-                    }
-                }
-            }
+    const size_t rows = (size_t)nq * (lmax + 1) * (lmax + 1);
+    for (int c = 0; c < 3; ++c, acc += rows * VL)
+        for (size_t r = 0; r < rows; ++r) vf_store(acc + r * VL, vf_fma(s[c], vf_load(w->soa + r * VL), vf_load(acc + r * VL)));
 }
 
 static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
@@ -662,16 +657,13 @@ static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int
         /* result = sign(S_0) * (input-order result); masked lanes get 0 */
         const vf fs = vf_mulsign(vf_load(w.lane + 4 * VL), omega);
         const vf fsg = vf_mul(fs, vf_set1(gs0)); /* d/dx = inv_scale d/dx_scaled = gs0 gs1 d/dx_scaled */
-        lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad);
+        lobes_zh(P, &w, lmax, 0, shl__zh_dir_f[0], omega, fs, fsg, s_b, s_s, norm, 0, with_grad, to_acc);
         for (int k = 1; k <= lmax; ++k) /* lobe pairs (2k-1, 2k), mirror images in y */
-            lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad);
+            lobes_zh(P, &w, lmax, k, shl__zh_dir_f[2 * k - 1], omega, fs, fsg, s_b, s_s, norm, 1, with_grad, to_acc);
         if (to_acc) {
             float *a = coeffs + (size_t)p0 / VL * 3 * nq * nc * VL;
-            if (gs1 != 1.0f)
-                for (size_t r = (size_t)L * L; r < (size_t)nq * L * L; ++r) {
-                    vf_store(w.u + r * VL, vf_mul(vf_load(w.u + r * VL), vf_set1(gs1)));
-                    vf_store(w.v + r * VL, vf_mul(vf_load(w.v + r * VL), vf_set1(gs1)));
-                }
+            for (size_t r = nc; gs1 != 1.0f && r < (size_t)nq * nc; ++r)
+                vf_store(w.soa + r * VL, vf_mul(vf_load(w.soa + r * VL), vf_set1(gs1)));
             /* lanes not accumulated (masked, or redone by the caller) add 0 x (their zeros), not
              * rgb x 0: an rgb beyond float range is inf, and inf x 0 = NaN made a point's result
              * depend on its batch (fuzz_lights-masked-lane-inf-rgb-nan) */
