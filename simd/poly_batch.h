@@ -87,7 +87,7 @@ typedef struct {
     float *acc;   /* [2 lobes][lmax + 2]: sum_e c_e B_l,e (ACC) */
     float *ib;    /* [2 lobes][SHL_MAX_VERTS][lmax + 2]: I_l,e of the gradient (IB) */
     float *u, *v; /* [nq][lmax + 1 pairs][lmax + 1]: paired sums and differences (zh_tables.h) */
-    float *soa;   /* [nq * nc]: SH coefficients of the block, one vector per row */
+    float *soa;   /* [nq * nc]: SH coefficients of the block, one vector per row (light sets: lobe sums) */
 } work_t;
 
 static size_t work_floats(int lmax, int nq, work_t *w, float *base)
@@ -617,7 +617,8 @@ static ALWAYS_INLINE void acc_light(const work_t *w, int lmax, const vf s[3], fl
 {
     const size_t rows = (size_t)nq * (lmax + 1) * (lmax + 1);
     for (int c = 0; c < 3; ++c, acc += rows * VL)
-        for (size_t r = 0; r < rows; ++r) vf_store(acc + r * VL, vf_fma(s[c], vf_load(w->soa + r * VL), vf_load(acc + r * VL)));
+        for (size_t r = 0; r < rows; ++r)
+            vf_store(acc + r * VL, vf_fma(s[c], vf_load(w->soa + r * VL), vf_load(acc + r * VL)));
 }
 
 static ALWAYS_INLINE int poly_batch_impl(const shl__batch_poly *P, int lmax, int npts, const float *pts,
