@@ -14,7 +14,8 @@
  *    time, on demand);
  *  - per-vertex set-up cost: lmax 0 (3 coefficients, shorter than a vector: both
  *    variants run the reference) is the cell search and weights plus 8 tiny loads,
- *    the part vectorizing across coefficients does not touch; 2 threads against 1,
+ *    the part vectorizing across coefficients does not touch; 2 threads against 1 for
+ *    shl_grid_interp and shl_grid_interp_f (CSV sections threads, threads_float_out),
  *    with the CPU efficiency (process CPU time, 1 thread / 2 threads) and, from DRAM, the share
  *    of the read bandwidth of both cores together (the memory-bound ceiling);
  *  - float output: shl_grid_interp_f (float vertices, float sums, float output) against
@@ -327,9 +328,9 @@ int main(int argc, char **argv)
              "(random vertex order), the SIMD kernel against the scalar reference, with and without the\n"
              "look-ahead (calls of one vertex: the order before it), bytes per vertex and the share of this\n"
              "core's read bandwidth (DRAM, resp. L2, measured in the same run), random vs cell-sorted vertex\n"
-             "order, 2 threads against 1 (from DRAM: the share of both cores' read bandwidth together), float output\n"
-             "(shl_grid_interp_f) against double output for Hermite at lmax 4 and 8, and the papers' GPU throughput\n"
-             "next to ours.\n"
+             "order, 2 threads against 1 for double and float output (from DRAM: the share of both cores' read\n"
+             "bandwidth together), float output (shl_grid_interp_f) against double output for Hermite at lmax 4\n"
+             "and 8, and the papers' GPU throughput next to ours.\n"
              "Memory: the out-of-cache size S is 4 x the L3 size sysconf reports, at least 120 MB; here S =\n"
              "%.2f GB.  Peak memory about 2 S: the bandwidth arrays (1.5 S, at least 384 MB), then two grids of S.\n"
              "--mb "
@@ -572,7 +573,8 @@ int main(int argc, char **argv)
         shl_ctx_destroy(ctx);
     }
 
-    printf("\n## Hermite interpolation, 2 threads vs 1 (SIMD kernel; calls of 8192 vertices, outputs not reused)\n\n");
+    printf("\n## Hermite interpolation, 2 threads vs 1 (SIMD kernel; calls of 8192 vertices, outputs not reused)\n\n"
+           "output double: shl_grid_interp; float: shl_grid_interp_f (the same vertices as floats).\n\n");
     printf("CPU efficiency: CPU time of the process per vertex, 1 thread / 2 threads (both threads' CPU time): below\n"
            "100%%, each core works slower next to the other (shared memory, clock); the speed-up the threads' CPU time\n"
            "allows is 2 x that; a wall-clock speed-up below it is time the threads do not run (start, wake-up,\n"
@@ -580,9 +582,10 @@ int main(int argc, char **argv)
     printf("From DRAM, 2 threads GB/s = grid bytes/vertex / 2-thread time per vertex, against the read bandwidth of both\n"
            "cores together (%.1f GB/s above): the memory-bound ceiling; from L2 each core reads its own cache.\n\n",
            read_two * 1e-9);
-    printf("| lmax | grid | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up | CPU efficiency | speed-up "
-           "by CPU time | 2 threads GB/s | of the two-core read BW |\n|---|---|---|---|---|---|---|---|---|\n");
+    printf("| lmax | grid | output | 1 thread ns/vertex | 2 threads ns/vertex | 2 threads / 1 thread speed-up | CPU efficiency "
+           "| speed-up by CPU time | 2 threads GB/s | of the two-core read BW |\n|---|---|---|---|---|---|---|---|---|---|\n");
     double *big_out = xmalloc(sizeof(double) * 8192 * 3 * SHL_NCOEFFS(8));
+    float *big_outf = xmalloc(sizeof(float) * 8192 * 3 * SHL_NCOEFFS(8));
     for (int li = quick ? 2 : 1; li < 3; ++li) {
         const int lmax = lmaxes[li];
         shl_ctx *ctx;
@@ -592,29 +595,37 @@ int main(int argc, char **argv)
             shl_grid *g = make_grid(ctx, big ? out_of_cache_res(lmax) : 4);
             job j1 = {g, SHL_INTERP_HERMITE, 1, 8192, NPTS, pts, big_out, 1}, j2 = j1;
             j2.nthreads = 2;
-            double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS], eff[MAX_ROUNDS];
-            run(&j1);
-            run(&j2);
-            for (int r = 0; r < rounds; ++r) {
-                const double c0 = process_cpu_now();
-                t1[r] = run(&j1);
-                const double c1 = process_cpu_now();
-                t2[r] = run(&j2);
-                eff[r] = (c1 - c0) / (process_cpu_now() - c1); /* CPU seconds, 1 thread / 2 threads */
-                sp[r] = t1[r] / t2[r];
+            for (int fl = 0; fl <= 1; ++fl) {
+                double t1[MAX_ROUNDS], t2[MAX_ROUNDS], sp[MAX_ROUNDS], eff[MAX_ROUNDS];
+                if (fl) {
+                    run_f(&j1, ptsf, big_outf);
+                    run_f(&j2, ptsf, big_outf);
+                } else {
+                    run(&j1);
+                    run(&j2);
+                }
+                for (int r = 0; r < rounds; ++r) {
+                    const double c0 = process_cpu_now();
+                    t1[r] = fl ? run_f(&j1, ptsf, big_outf) : run(&j1);
+                    const double c1 = process_cpu_now();
+                    t2[r] = fl ? run_f(&j2, ptsf, big_outf) : run(&j2);
+                    eff[r] = (c1 - c0) / (process_cpu_now() - c1); /* CPU seconds, 1 thread / 2 threads */
+                    sp[r] = t1[r] / t2[r];
+                }
+                const double m1 = bench_median(t1, rounds), m2 = bench_median(t2, rounds), msp = bench_median(sp, rounds);
+                const double meff = bench_median(eff, rounds);
+                const double bpv = bytes_per_vertex(SHL_INTERP_HERMITE, SHL_NCOEFFS(lmax)), gbs = bpv / m2 * 1e-9;
+                printf("| %d | %s | %s | %.1f | %.1f | **%.2fx** | %.0f%% | %.2fx |", lmax, big ? "DRAM" : "L2", fl ? "float" : "double",
+                       m1 * 1e9, m2 * 1e9, msp, 100.0 * meff, 2.0 * meff);
+                if (big)
+                    printf(" %.1f | **%.0f%%** |\n", gbs, 100.0 * gbs / (read_two * 1e-9));
+                else
+                    printf(" - | - |\n");
+                if (csv)
+                    fprintf(csv, "%s,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,%.0f,%.3f,%.3f,,,%.3f\n", fl ? "threads_float_out" : "threads",
+                            lmax, big ? "dram" : "l2", isa, m2 * 1e9, m1 * 1e9, msp, bpv, big ? gbs : 0.0,
+                            big ? gbs / (read_two * 1e-9) : 0.0, meff);
             }
-            const double m1 = bench_median(t1, rounds), m2 = bench_median(t2, rounds), msp = bench_median(sp, rounds);
-            const double meff = bench_median(eff, rounds);
-            const double bpv = bytes_per_vertex(SHL_INTERP_HERMITE, SHL_NCOEFFS(lmax)), gbs = bpv / m2 * 1e-9;
-            printf("| %d | %s | %.1f | %.1f | **%.2fx** | %.0f%% | %.2fx |", lmax, big ? "DRAM" : "L2", m1 * 1e9, m2 * 1e9, msp,
-                   100.0 * meff, 2.0 * meff);
-            if (big)
-                printf(" %.1f | **%.0f%%** |\n", gbs, 100.0 * gbs / (read_two * 1e-9));
-            else
-                printf(" - | - |\n");
-            if (csv)
-                fprintf(csv, "threads,%d,Hermite,%s,%s,%.2f,%.2f,%.3f,,%.0f,%.3f,%.3f,,,%.3f\n", lmax, big ? "dram" : "l2", isa,
-                        m2 * 1e9, m1 * 1e9, msp, bpv, big ? gbs : 0.0, big ? gbs / (read_two * 1e-9) : 0.0, meff);
             shl_grid_destroy(g);
         }
         shl_ctx_destroy(ctx);
@@ -655,6 +666,7 @@ int main(int argc, char **argv)
     free(ptsf);
     free(outf);
     free(big_out);
+    free(big_outf);
     shl_ctx_destroy(probe);
     return 0;
 }
