@@ -55,11 +55,17 @@ static void hset(shl__ahash *h, uint64_t k, uint32_t v)
     ++h->count;
 }
 
-/* Room for one more key (load <= 1/2); SHL_ENOMEM leaves h as it was. */
-static int hreserve(shl__ahash *h)
+/* The least table size (a power of two, at least 64) that holds n keys at load <= 1/2. */
+static size_t hsize(size_t n)
 {
-    if (2 * (h->count + 1) <= h->cap) return SHL_OK;
-    const size_t cap = h->cap ? 2 * h->cap : 64;
+    size_t cap = 64;
+    while (cap < 2 * n) cap *= 2;
+    return cap;
+}
+
+/* h rehashed into an empty table of cap slots (cap >= 2 h->count); SHL_ENOMEM leaves h as it was. */
+static int hresize(shl__ahash *h, size_t cap)
+{
     shl__ahash n = {shl__calloc(cap, sizeof(uint64_t)), shl__malloc(cap * sizeof(uint32_t)), cap, 0};
     if (!n.key || !n.val) {
         shl__free(n.key);
@@ -72,6 +78,12 @@ static int hreserve(shl__ahash *h)
     shl__free(h->val);
     *h = n;
     return SHL_OK;
+}
+
+/* Room for one more key (load <= 1/2): after n keys the size is hsize(n); SHL_ENOMEM leaves h as it was. */
+static int hreserve(shl__ahash *h)
+{
+    return 2 * (h->count + 1) <= h->cap ? SHL_OK : hresize(h, h->cap ? 2 * h->cap : 64);
 }
 
 /* *p (cap elements of size elem, used first) grown to newcap elements. */
@@ -101,13 +113,33 @@ static void level_free(shl__alevel *L)
     memset(L, 0, sizeof *L);
 }
 
-static void level_init(const shl_agrid *g, int l, shl__alevel *L)
+/* Level l's lattice, with room for its nodes and cells: on level 0 their counts, on a finer
+ * level those of the grid's last fill (a refill of similar lights then grows no array; each
+ * growth copied the arrays into fresh pages, and the copies and page faults took ~15% of a
+ * fill).  SHL_ENOMEM: level_free(L) releases what was allocated. */
+static int level_init(const shl_agrid *g, int l, shl__alevel *L)
 {
+    size_t nodes = 1, cells = 1;
+    for (int a = 0; a < 3 && l == 0; ++a) nodes *= (size_t)g->res[a], cells *= (size_t)g->res[a] - 1;
+    if (l > 0) nodes = l < g->nlevels ? g->lev[l].nnodes : 0, cells = l < g->nlevels ? g->lev[l].ncells : 0;
     memset(L, 0, sizeof *L);
     for (int a = 0; a < 3; ++a) {
         L->n[a] = (g->res[a] - 1) << l;
         L->h[a] = (g->hi[a] - g->lo[a]) / L->n[a]; /* = h_0 / 2^l exactly: node 2i of level l + 1 is node i of level l */
     }
+    if (nodes > 0) {
+        if (!(L->node_key = shl__malloc(nodes * sizeof *L->node_key)) || !(L->flag = shl__malloc(nodes)) ||
+            !(L->data = shl__malloc(nodes * g->node_len * sizeof *L->data)) || hresize(&L->nodes, hsize(nodes)))
+            return SHL_ENOMEM;
+        L->node_cap = L->data_cap = nodes;
+    }
+    if (cells > 0) {
+        if (!(L->cell_key = shl__malloc(cells * sizeof *L->cell_key)) || !(L->cell = shl__malloc(cells * sizeof *L->cell)) ||
+            hresize(&L->cells, hsize(cells)))
+            return SHL_ENOMEM;
+        L->cell_cap = cells;
+    }
+    return SHL_OK;
 }
 
 static size_t level_bytes(const shl__alevel *L, size_t node_len)
@@ -122,8 +154,8 @@ static int add_node(shl__alevel *L, const int i[3], size_t node_len)
 {
     if (L->nnodes == L->node_cap) {
         const size_t cap = L->node_cap ? 2 * L->node_cap : 256;
-        /* realloc (large blocks move by remapping, not copying); each array is swapped in
-         * as it grows and node_cap set only when all three have: a failure leaves L consistent */
+        /* realloc (a large block may move by remapping instead of copying); each array is swapped
+         * in as it grows and node_cap set only when all three have: a failure leaves L consistent */
         uint64_t *k = shl__realloc(L->node_key, cap * sizeof *k);
         if (!k) return SHL_ENOMEM;
         L->node_key = k;
@@ -184,7 +216,7 @@ static void resolve_cells(shl__alevel *L, size_t from, int level0)
 /* Level 0: every node and cell, nodes in lattice order. */
 static int build_level0(const shl_agrid *g, shl__alevel *L)
 {
-    level_init(g, 0, L);
+    if (level_init(g, 0, L)) return SHL_ENOMEM;
     int i[3];
     for (i[2] = 0; i[2] <= L->n[2]; ++i[2])
         for (i[1] = 0; i[1] <= L->n[1]; ++i[1])
@@ -602,13 +634,30 @@ static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint
     return SHL_OK;
 }
 
-/* The node data of a filled level cut to its node count (kept as is if that allocation fails). */
-static void trim_data(shl__alevel *L, size_t node_len)
+/* A filled level's arrays cut to its node and cell counts, and hash tables larger than
+ * hsize of their counts (room from a larger last fill, level_init) rebuilt at that size:
+ * the memory held then depends on the counts only, not on earlier fills (each part
+ * kept as is if its allocation fails). */
+static void trim_level(shl__alevel *L, size_t node_len)
 {
-    float *d = L->nnodes ? shl__realloc(L->data, L->nnodes * node_len * sizeof *d) : NULL;
-    if (!d) return;
-    L->data = d;
-    L->data_cap = L->nnodes;
+    if (L->nnodes > 0 && L->nnodes < L->data_cap) {
+        float *d = shl__realloc(L->data, L->nnodes * node_len * sizeof *d);
+        if (d) L->data = d, L->data_cap = L->nnodes;
+    }
+    /* node_cap, cell_cap: the room of both arrays, so the count once the first is cut */
+    uint64_t *k;
+    if (L->nnodes > 0 && L->nnodes < L->node_cap && (k = shl__realloc(L->node_key, L->nnodes * sizeof *k))) {
+        L->node_key = k, L->node_cap = L->nnodes;
+        unsigned char *f = shl__realloc(L->flag, L->nnodes);
+        if (f) L->flag = f;
+    }
+    if (L->ncells > 0 && L->ncells < L->cell_cap && (k = shl__realloc(L->cell_key, L->ncells * sizeof *k))) {
+        L->cell_key = k, L->cell_cap = L->ncells;
+        shl__acell *c = shl__realloc(L->cell, L->ncells * sizeof *c);
+        if (c) L->cell = c;
+    }
+    if (L->nodes.cap > hsize(L->nodes.count)) (void)hresize(&L->nodes, hsize(L->nodes.count));
+    if (L->cells.cap > hsize(L->cells.count)) (void)hresize(&L->cells, hsize(L->cells.count));
 }
 
 static void free_levels(shl__alevel *lev, int n)
@@ -705,8 +754,8 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
                 continue;
             }
             if (l + 1 >= *nl) {
-                level_init(g, l + 1, lev + l + 1);
                 *nl = l + 2;
+                if ((status = level_init(g, l + 1, lev + l + 1))) break;
             }
             const int r = refine(g, lev + l, lev + l + 1, queue[k].cell, &total);
             if (r == 1) st->budget_hit = 1;
@@ -760,7 +809,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
             ++real;
         }
         st->unresolved = unknown ? -1 : real;
-        for (int l = 0; l < *nl; ++l) trim_data(lev + l, g->node_len);
+        for (int l = 0; l < *nl; ++l) trim_level(lev + l, g->node_len);
         fill_stats(g, lev, *nl, st);
     }
     shl__free(queue);
@@ -835,7 +884,7 @@ int shl_agrid_create(const shl_ctx *ctx, const double lo[3], const double hi[3],
         return SHL_ENOMEM;
     }
     memset(g->lev[0].data, 0, g->lev[0].nnodes * g->node_len * sizeof(float));
-    trim_data(g->lev, g->node_len);
+    trim_level(g->lev, g->node_len);
     g->nlevels = 1;
     fill_stats(g, g->lev, 1, &g->stats);
     *out = g;

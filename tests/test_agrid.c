@@ -1,8 +1,9 @@
 /* Adaptive grids (shl_agrid_*): bad input and allocation/thread failures (nothing
  * written, handles NULL), accuracy against shl_lights_eval (double) at independent
  * random points, C0 continuity across level boundaries, the node budget, thread
- * independence, a light inside the box refined around instead of blurred, and
- * budget-driven (best-first) fills, receivers and weighted receivers. */
+ * independence, refills equal to fresh fills, a light inside the box refined around
+ * instead of blurred, and budget-driven (best-first) fills, receivers and weighted
+ * receivers. */
 #include "harness.h"
 #include "agrid.h"    /* shl__alevel: the refined cells */
 #include "internal.h" /* shl__alloc_fail_after, shl__thread_fail_after */
@@ -353,6 +354,50 @@ static void fixture_free(fixture *f)
  * expected no larger (h^3 to h^4 smaller for a smooth field).  The bound is asymptotic (h small against the distance to the
  * lights: here >= 0.5 at h <= 0.33), so the test accepts 4 tol + 1e-5 max|L|;
  * it also requires the mean error to be below tol. */
+/* A refill starts from the last fill's node and cell counts (src/agrid.c, level_init):
+ * refills to fewer nodes (the outside lights), then to more (the inside light), then
+ * of the same lights, then to far fewer on the finer levels (a small light above the
+ * box) each equal a fresh grid's fill bit for bit, stats included (bytes held: a
+ * function of the counts, not of earlier fills). */
+SHL_TEST(agrid_refill_equals_fresh_fill)
+{
+    shl_ctx *ctx = ctx_new();
+    shl_lights *in = inside_light(), *out = outside_lights(), *far;
+    const double tri[9] = {-0.2, -0.2, 1.5, 0.2, -0.2, 1.5, 0.0, 0.2, 1.5}, c[3] = {1.0, 1.0, 1.0};
+    CHECK(shl_lights_create(&far) == SHL_OK);
+    CHECK(shl_lights_add_polygon(far, tri, 3, c, 1) == SHL_OK);
+    enum { NP = 400 };
+    rng_t r = {29};
+    double pts[3 * NP], *a = malloc(sizeof(double) * NP * NV), *b = malloc(sizeof(double) * NP * NV);
+    for (int i = 0; i < 3 * NP; ++i) pts[i] = rng_range(&r, -1.0, 1.0);
+    shl_agrid_stats s;
+    shl_agrid *g = filled(ctx, in, SHL_AGRID_MAX, 1e-3, 6000, &s);
+    const shl_lights *order[4] = {out, in, in, far};
+    long nodes[4];
+    int same = 1;
+    for (int k = 0; k < 4; ++k) {
+        shl_agrid_stats sr, sf;
+        CHECK(shl_agrid_fill(g, order[k], 1) == SHL_OK);
+        CHECK(shl_agrid_get_stats(g, &sr) == SHL_OK);
+        CHECK(shl_agrid_interp(g, NP, pts, a, 1) == SHL_OK);
+        shl_agrid *fresh = filled(ctx, order[k], SHL_AGRID_MAX, 1e-3, 6000, &sf);
+        CHECK(shl_agrid_interp(fresh, NP, pts, b, 1) == SHL_OK);
+        same &= memcmp(a, b, sizeof(double) * NP * NV) == 0 && memcmp(&sr, &sf, sizeof sr) == 0;
+        nodes[k] = sr.nodes;
+        shl_agrid_destroy(fresh);
+    }
+    CHECK(same);
+    CHECK(nodes[0] < s.nodes && nodes[1] == s.nodes && nodes[2] == s.nodes && nodes[3] < nodes[0]);
+    harness_note("nodes %ld -> %ld -> %ld -> %ld -> %ld", s.nodes, nodes[0], nodes[1], nodes[2], nodes[3]);
+    shl_agrid_destroy(g);
+    shl_lights_destroy(in);
+    shl_lights_destroy(out);
+    shl_lights_destroy(far);
+    shl_ctx_destroy(ctx);
+    free(a);
+    free(b);
+}
+
 SHL_TEST(agrid_smooth_within_tolerance)
 {
     enum { NP = 2000 };
