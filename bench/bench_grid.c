@@ -526,6 +526,7 @@ typedef struct {
     float *rgb, *grad;
     const double *dpts;
     double *drgb, *dgrad;
+    shl_agrid *ag;
 } fr_job;
 
 static void fr_fill(void *a) { const fr_job *j = a; must(shl_grid_fill(j->g, j->l, j->nthreads), "fill"); }
@@ -543,6 +544,12 @@ static void fr_poly(void *a)
 {
     const fr_job *j = a;
     must(shl_polygon_batch_f_mt(j->ctx, j->tri, 3, j->npts, j->pts, j->rgb, j->grad, j->nthreads), "polygon batch");
+}
+static void fr_afill(void *a) { const fr_job *j = a; must(shl_agrid_fill(j->ag, j->l, j->nthreads), "agrid fill"); }
+static void fr_ainterp(void *a)
+{
+    const fr_job *j = a;
+    must(shl_agrid_interp(j->ag, j->npts, j->dpts, j->drgb, j->nthreads), "agrid interp");
 }
 static void fr_sphere(void *a)
 {
@@ -613,7 +620,7 @@ static void thread_start_cost(double shortest_call)
     shl_lights *l;
     must(shl_lights_create(&l), "lights");
     float pts[3 * NPTS] = {0}, rgb[3 * NPTS];
-    fr_job j1 = {ctx, l, NULL, NPTS, 1, pts, NULL, NULL, rgb, NULL, NULL, NULL, NULL}, j2 = j1;
+    fr_job j1 = {ctx, l, NULL, NPTS, 1, pts, NULL, NULL, rgb, NULL, NULL, NULL, NULL, NULL}, j2 = j1;
     j2.nthreads = 2;
     const paired m = time_pair(fr_empty_calls, &j1, fr_empty_calls, &j2);
     const double cost = (m.wall_b - m.wall_a) / 100;
@@ -657,7 +664,7 @@ static void fill_rate(void)
                 must(shl_grid_node_position(g, idx, x), "node position");
                 for (int a = 0; a < 3; ++a) pts[3 * i + a] = (float)x[a];
             }
-            fr_job j = {ctx, l, g, NN, 1, pts, NULL, NULL, rgb, grad, NULL, NULL, NULL};
+            fr_job j = {ctx, l, g, NN, 1, pts, NULL, NULL, rgb, grad, NULL, NULL, NULL, NULL};
             const paired m = time_pair(fr_fill, &j, fr_set_f, &j);
             bench_sink += rgb[0];
             printf("| %d | %d | %.0f | %.0f | %.2f |\n", lmaxes[li], nls[n], m.cpu_a / NN * 1e9, m.cpu_b / NN * 1e9,
@@ -677,18 +684,28 @@ static void fill_rate(void)
     shl_lights *l = subdivided_light(8);
     float *bp = xmalloc(sizeof(float) * 3 * NP), *rgb = xmalloc(sizeof(float) * 3 * nc * NP),
           *grad = xmalloc(sizeof(float) * 9 * nc * NP);
-    double *dp = xmalloc(sizeof(double) * 3 * ND), *drgb = xmalloc(sizeof(double) * 3 * nc * ND),
+    double *dp = xmalloc(sizeof(double) * 3 * NP / 4), *drgb = xmalloc(sizeof(double) * 3 * nc * NP / 4),
            *dgrad = xmalloc(sizeof(double) * 9 * nc * ND);
     for (int i = 0; i < NP; ++i) {
         bp[3 * i] = (float)(-1.0 + 2.0 * (i % 181) / 180.0);
         bp[3 * i + 1] = (float)(-1.0 + 2.0 * (i / 181 % 181) / 180.0);
         bp[3 * i + 2] = (float)(0.1 * (i % 7));
     }
-    for (int i = 0; i < 3 * ND; ++i) dp[i] = bp[i];
+    for (int i = 0; i < 3 * NP / 4; ++i) dp[i] = bp[i];
     const float tri[9] = {-0.8f, -0.8f, 1.0f, -0.8f, 0.8f, 1.0f, 0.8f, 0.8f, 1.0f}, center[3] = {0.0f, 0.0f, 1.5f};
     shl_grid *g;
     const int r32[3] = {32, 32, 32};
     must(shl_grid_create(ctx, lo, hi, r32, SHL_GRID_FLOAT, &g), "grid");
+    /* adaptive: 8^3 coarse nodes, refined where the mean-error share exceeds 1e-4 (the light's
+     * coefficients are O(1)), at most 32^3 nodes */
+    shl_agrid *ag;
+    const int r8[3] = {8, 8, 8};
+    must(shl_agrid_create(ctx, lo, hi, r8, SHL_AGRID_MEAN, 1e-4, 32 * 32 * 32, &ag), "agrid");
+    must(shl_agrid_fill(ag, l, 1), "agrid fill");
+    shl_agrid_stats st;
+    must(shl_agrid_get_stats(ag, &st), "agrid stats");
+    char afill_name[96];
+    snprintf(afill_name, sizeof afill_name, "shl_agrid_fill (8^3 coarse, %d levels; points: nodes)", st.levels);
     char load[64];
     bench_loadavg(load, sizeof load);
     printf("\n## Threads on every batch entry point (lmax %d, gradients, 8 triangle lights for the sets)\n\n"
@@ -704,16 +721,18 @@ static void fill_rate(void)
         const char *name;
         void (*fn)(void *);
         int npts;
-    } eps[5] = {{"shl_polygon_batch_f_mt", fr_poly, NP},
+    } eps[7] = {{"shl_polygon_batch_f_mt", fr_poly, NP},
                 {"shl_sphere_batch_f_mt", fr_sphere, NP},
                 {"shl_lights_eval_batch_f_mt", fr_set_f, NP / 4},
                 {"shl_lights_eval_batch_mt (double)", fr_set_d, ND},
-                {"shl_grid_fill (32^3 float)", fr_fill, 32 * 32 * 32}};
+                {"shl_grid_fill (32^3 float)", fr_fill, 32 * 32 * 32},
+                {afill_name, fr_afill, (int)st.nodes},
+                {"shl_agrid_interp", fr_ainterp, NP / 4}};
     double shortest = INFINITY, busy0, total0;
     machine_cpu(&busy0, &total0);
     const double own0 = cpu_now();
-    for (int e = 0; e < 5; ++e) {
-        fr_job j1 = {ctx, l, g, eps[e].npts, 1, bp, tri, center, rgb, grad, dp, drgb, dgrad}, j2 = j1;
+    for (int e = 0; e < 7; ++e) {
+        fr_job j1 = {ctx, l, g, eps[e].npts, 1, bp, tri, center, rgb, grad, dp, drgb, dgrad, ag}, j2 = j1;
         j2.nthreads = 2;
         const paired m = time_pair(eps[e].fn, &j1, eps[e].fn, &j2);
         shortest = fmin(shortest, m.wall_b);
@@ -733,6 +752,7 @@ static void fill_rate(void)
     machine_thread_ceiling();
     thread_start_cost(shortest);
     bench_sink += rgb[0] + drgb[0];
+    shl_agrid_destroy(ag);
     shl_grid_destroy(g);
     shl_lights_destroy(l);
     shl_ctx_destroy(ctx);
