@@ -507,9 +507,9 @@ static void nodes_range(void *arg, int worker, long begin, long end)
 }
 
 /* The estimate of the cells job->which of units begin..end-1 (include/shlight.h), up to
- * BLOCK / SAMPLES cells a block whatever their levels: A of levels 0..l (l the cell's level) against the
- * float batch (values only) at the samples lo + (c + q) h_l, q = 1/4 and 3/4 on every
- * axis, both rounded to float. */
+ * BLOCK / SAMPLES cells a block whatever their levels: A of levels 0..l (l the cell's
+ * level) against the float batch (values only) at the samples lo + (c + q) h_l, q = 1/4
+ * and 3/4 on every axis, both rounded to float. */
 static void estimate_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
