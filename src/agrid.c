@@ -447,13 +447,7 @@ int shl_agrid_set_weighted_receivers(shl_agrid *grid, int npts, const double *pt
 
 /* ---- fill ---- */
 
-/* A pass's work goes to the threads in units of UNIT nodes (UNIT / SAMPLES cells), in
- * guided chunks (shl__parallel_for_guided: the last ones short, so the threads end
- * within about a unit of each other; with 64-node blocks a pass of 8-40 blocks lost up
- * to half a block to the slower thread); a chunk runs through the batch in blocks of at
- * most BLOCK nodes.  The batch's values do not depend on the other points of a call
- * (test_simd_lights), so neither do the nodes on the chunks. */
-enum { BLOCK = SHL__LIGHTS_BLOCK, UNIT = 16, SAMPLES = 2 };
+enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
 
 /* A cell (index in its level), its estimate e, its weight w (cell_weight) and its
  * refinement priority p = e w; or, if pending, a refined cell whose children are not
@@ -470,7 +464,7 @@ typedef struct {
     shl_ctx ctx;
     shl__alevel *lev;
     size_t from[SHL_AGRID_LEVELS_MAX]; /* eval_nodes: the nodes from[l].. of each level l are new, */
-    long blk[SHL_AGRID_LEVELS_MAX + 1]; /* in units blk[l] .. blk[l + 1] - 1 (none crosses a level) */
+    long blk[SHL_AGRID_LEVELS_MAX + 1]; /* in blocks blk[l] .. blk[l + 1] - 1 (none crosses a level) */
     ranked *which;  /* estimate_cells: the cells estimated (any levels), their estimates into .e */
     size_t nwhich;
     char *ws;
@@ -479,8 +473,8 @@ typedef struct {
     size_t wsbytes;
 } fill_job;
 
-/* The new nodes of units begin..end-1, blocks of up to BLOCK consecutive nodes of one
- * level, through the float batch with gradients (Wu 2020 Alg. 1 l. 5-7), straight into
+/* The new nodes of every level, blocks of BLOCK consecutive nodes of one level,
+ * through the float batch with gradients (Wu 2020 Alg. 1 l. 5-7), straight into
  * the node data. */
 static void nodes_range(void *arg, int worker, long begin, long end)
 {
@@ -488,14 +482,12 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     const shl_agrid *g = job->g;
     void *buf = job->batch_bytes ? job->ws + job->stride * (size_t)worker : NULL;
     float pts[3 * BLOCK];
-    for (long b = begin, take; b < end; b += take) {
+    for (long b = begin; b < end; ++b) {
         int l = 0;
         while (b >= job->blk[l + 1]) ++l;
         shl__alevel *L = job->lev + l;
-        const long units = (end < job->blk[l + 1] ? end : job->blk[l + 1]) - b;
-        take = units < BLOCK / UNIT ? units : BLOCK / UNIT;
-        const size_t n0 = job->from[l] + (size_t)(b - job->blk[l]) * UNIT, left = L->nnodes - n0;
-        const int m = left < (size_t)take * UNIT ? (int)left : (int)take * UNIT;
+        const size_t n0 = job->from[l] + (size_t)(b - job->blk[l]) * BLOCK, left = L->nnodes - n0;
+        const int m = left < BLOCK ? (int)left : BLOCK;
         for (int j = 0; j < m; ++j) {
             int i[3];
             unkey(L->node_key[n0 + j], i);
@@ -506,10 +498,10 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     }
 }
 
-/* The estimate of the cells job->which of units begin..end-1 (include/shlight.h), up to
- * BLOCK / SAMPLES cells a block whatever their levels: A of levels 0..l (l the cell's
- * level) against the float batch (values only) at the samples lo + (c + q) h_l, q = 1/4
- * and 3/4 on every axis, both rounded to float. */
+/* The estimate of the cells job->which (include/shlight.h), BLOCK / SAMPLES cells a
+ * block whatever their levels: A of levels 0..l (l the cell's level) against the
+ * float batch (values only) at the samples lo + (c + q) h_l, q = 1/4 and 3/4 on every
+ * axis, both rounded to float. */
 static void estimate_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
@@ -518,10 +510,9 @@ static void estimate_range(void *arg, int worker, long begin, long end)
     char *w = job->ws + job->stride * (size_t)worker;
     float *rgb = (float *)(void *)(w + shl__ws_stride(job->batch_bytes)), pts[3 * BLOCK];
     double *a = (double *)(void *)(rgb + BLOCK * nv), *tmp = a + nv;
-    for (long b = begin, take; b < end; b += take) {
-        take = end - b < BLOCK / UNIT ? end - b : BLOCK / UNIT;
-        const size_t c0 = (size_t)b * (UNIT / SAMPLES), left = job->nwhich - c0;
-        const int mc = left < (size_t)take * (UNIT / SAMPLES) ? (int)left : (int)take * (UNIT / SAMPLES);
+    for (long b = begin; b < end; ++b) {
+        const size_t c0 = (size_t)b * (BLOCK / SAMPLES), left = job->nwhich - c0;
+        const int mc = left < BLOCK / SAMPLES ? (int)left : BLOCK / SAMPLES;
         for (int j = 0; j < mc; ++j) {
             const ranked *r = job->which + c0 + j;
             const shl__alevel *L = job->lev + r->level;
@@ -560,12 +551,10 @@ static void estimate_range(void *arg, int worker, long begin, long end)
     }
 }
 
-/* fn over the units 0..nunits-1 of a pass, each worker with its workspace (the batch's,
- * then extra bytes). */
-static int run(fill_job *job, long nunits, int nthreads, shl__range_fn fn, size_t extra)
+static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size_t extra)
 {
-    if (nunits == 0) return SHL_OK;
-    const int nw = shl__parallel_workers(nunits, BLOCK / UNIT, nthreads);
+    if (nblocks == 0) return SHL_OK;
+    const int nw = shl__parallel_workers(nblocks, 1, nthreads);
     job->stride = shl__ws_stride(shl__ws_stride(job->batch_bytes) + extra);
     const size_t need = job->stride * (size_t)nw;
     if (need > job->wsbytes) { /* a fresh block per pass costs page faults at every round */
@@ -576,7 +565,7 @@ static int run(fill_job *job, long nunits, int nthreads, shl__range_fn fn, size_
         job->wsbytes = need;
     }
     job->ws = job->wsbuf;
-    return shl__parallel_for_guided(nunits, 1, nw, fn, job);
+    return shl__parallel_for(nblocks, 1, nw, fn, job);
 }
 
 /* The nodes of levels 0..nl-1 not yet evaluated, in one parallel pass. */
@@ -584,7 +573,7 @@ static int eval_nodes(fill_job *job, int nl, int nthreads)
 {
     job->blk[0] = 0;
     for (int l = 0; l < SHL_AGRID_LEVELS_MAX; ++l)
-        job->blk[l + 1] = job->blk[l] + (l < nl ? (long)((job->lev[l].nnodes - job->from[l] + UNIT - 1) / UNIT) : 0);
+        job->blk[l + 1] = job->blk[l] + (l < nl ? (long)((job->lev[l].nnodes - job->from[l] + BLOCK - 1) / BLOCK) : 0);
     const int st = run(job, job->blk[SHL_AGRID_LEVELS_MAX], nthreads, nodes_range, 0);
     for (int l = 0; !st && l < nl; ++l) job->from[l] = job->lev[l].nnodes;
     return st;
@@ -596,7 +585,7 @@ static int estimate_cells(fill_job *job, ranked *which, size_t nwhich, int nthre
     job->which = which;
     job->nwhich = nwhich;
     const size_t nv = 3 * (size_t)job->g->nc;
-    const long n = (long)((nwhich + UNIT / SAMPLES - 1) / (UNIT / SAMPLES));
+    const long n = (long)((nwhich + BLOCK / SAMPLES - 1) / (BLOCK / SAMPLES));
     return run(job, n, nthreads, estimate_range, BLOCK * nv * sizeof(float) + 2 * nv * sizeof(double));
 }
 
