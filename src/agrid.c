@@ -606,31 +606,41 @@ static int by_estimate(const void *pa, const void *pb)
 /* Refine cell c of level l: level l + 1 gets the cells within one level-(l+1)
  * spacing of c (4 per axis, clipped to the box) and their nodes, unless that
  * would take the node count *total past max_nodes (returns 1, nothing added); the
- * level-(l+1) nodes of c (3 per axis) are flagged. */
+ * level-(l+1) nodes of c (3 per axis) are flagged.  The new nodes are counted
+ * beforehand only when the region's nodes could pass the budget, and each node is
+ * looked up once (its index flags it). */
 static int refine(const shl_agrid *g, const shl__alevel *L, shl__alevel *F, uint32_t c, long *total)
 {
     int ci[3], lo[3], hi[3], i[3];
     unkey(L->cell_key[c], ci);
+    long span = 1; /* nodes of the region, at most 5^3 */
     for (int a = 0; a < 3; ++a) {
         lo[a] = ci[a] > 0 ? 2 * ci[a] - 1 : 0;
         hi[a] = ci[a] + 1 < L->n[a] ? 2 * ci[a] + 3 : 2 * L->n[a];
+        span *= hi[a] - lo[a] + 1;
     }
-    long add = 0;
-    for (i[2] = lo[2]; i[2] <= hi[2]; ++i[2])
-        for (i[1] = lo[1]; i[1] <= hi[1]; ++i[1])
-            for (i[0] = lo[0]; i[0] <= hi[0]; ++i[0]) add += hfind(&F->nodes, key3(i)) < 0;
-    if (add > g->max_nodes - *total) return 1;
+    if (span > g->max_nodes - *total) {
+        long add = 0;
+        for (i[2] = lo[2]; i[2] <= hi[2]; ++i[2])
+            for (i[1] = lo[1]; i[1] <= hi[1]; ++i[1])
+                for (i[0] = lo[0]; i[0] <= hi[0]; ++i[0]) add += hfind(&F->nodes, key3(i)) < 0;
+        if (add > g->max_nodes - *total) return 1;
+    }
     for (i[2] = lo[2]; i[2] <= hi[2]; ++i[2])
         for (i[1] = lo[1]; i[1] <= hi[1]; ++i[1])
             for (i[0] = lo[0]; i[0] <= hi[0]; ++i[0]) {
-                if (hfind(&F->nodes, key3(i)) < 0 && add_node(F, i, g->node_len)) return SHL_ENOMEM;
+                long at = hfind(&F->nodes, key3(i));
+                if (at < 0) {
+                    at = (long)F->nnodes;
+                    if (add_node(F, i, g->node_len)) return SHL_ENOMEM;
+                    ++*total;
+                }
+                int own = 1; /* a node of c: 2 ci .. 2 ci + 2 on every axis */
+                for (int a = 0; a < 3; ++a) own &= i[a] >= 2 * ci[a] && i[a] <= 2 * ci[a] + 2;
+                if (own) F->flag[at] = 1;
                 if (i[0] < hi[0] && i[1] < hi[1] && i[2] < hi[2] && hfind(&F->cells, key3(i)) < 0 && add_cell(F, i))
                     return SHL_ENOMEM;
             }
-    *total += add;
-    for (i[2] = 2 * ci[2]; i[2] <= 2 * ci[2] + 2; ++i[2])
-        for (i[1] = 2 * ci[1]; i[1] <= 2 * ci[1] + 2; ++i[1])
-            for (i[0] = 2 * ci[0]; i[0] <= 2 * ci[0] + 2; ++i[0]) F->flag[hfind(&F->nodes, key3(i))] = 1;
     return SHL_OK;
 }
 
