@@ -315,8 +315,7 @@ int shl_agrid_interp(const shl_agrid *grid, int npts, const double *pts, double 
 {
     if (!grid || (npts > 0 && (!pts || !rgb))) return SHL_ENULL;
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (shl__check_finite(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     interp_job job = {grid, pts, rgb};
     return shl__parallel_for(npts, 256, nthreads, interp_range, &job);
 }

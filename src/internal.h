@@ -80,9 +80,12 @@ static inline int shl__hook_fails(long *left)
 }
 #endif
 
-/* Argument checks shared by the API entry points (context.c). */
-int shl__check_finite(const double *v, int count);
-int shl__check_finite_f(const float *v, int count);
+/* Argument checks shared by the API entry points (context.c): SHL_ENONFINITE when one of
+ * the count values is infinite or NaN, else SHL_OK.  One pass over all of them without an
+ * early exit, which the compiler vectorizes: a batch checks its whole point array in one
+ * call (the per-point calls were 3% of the polygon batch's time at lmax 8, and serial). */
+int shl__check_finite(const double *v, size_t count);
+int shl__check_finite_f(const float *v, size_t count);
 
 /* ---- small vector and polygon helpers (one copy for src/ and simd/) ---- */
 static inline double shl__dot3(const double a[3], const double b[3])

@@ -244,10 +244,10 @@ static int grid_interp(const shl_grid *grid, int method, double taylor_b, int np
 {
     const int bad = check_call(grid, method, taylor_b, npts, pts, rgb, nthreads);
     if (bad) return bad;
+    if (shl__check_finite(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     int outside = 0;
     for (int p = 0; p < npts; ++p) {
         const double *x = pts + 3 * (size_t)p;
-        if (shl__check_finite(x, 3)) return SHL_ENONFINITE;
         int out = 0;
         for (int a = 0; a < 3; ++a) out |= x[a] < grid->lo[a] || x[a] > grid->hi[a];
         outside += out;
@@ -364,8 +364,7 @@ int shl_grid_interp_f(const shl_grid *grid, int method, double taylor_b, int npt
     if (grid->storage != SHL_GRID_FLOAT) return SHL_EDOMAIN;
     for (int a = 0; a < 3 && method != SHL_INTERP_TRILINEAR; ++a)
         if (!(grid->h[a] >= SPACING_FF_MIN && grid->h[a] <= SPACING_FF_MAX)) return SHL_EDOMAIN;
-    for (size_t i = 0; i < 3 * (size_t)npts; ++i)
-        if (!isfinite(pts[i])) return SHL_ENONFINITE;
+    if (shl__check_finite_f(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     interp_job_ff job = {grid, method, taylor_b, pts, rgb,
                          grid->nnodes * grid->node_len * sizeof(float) > SHL__INTERP_AHEAD_BYTES,
                          {.node_len = grid->node_len}};

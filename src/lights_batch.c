@@ -197,8 +197,7 @@ int shl_lights_eval_batch_f_mt(const shl_ctx *ctx, const shl_lights *lights, int
 {
     if (!ctx || !lights || (npts > 0 && (!pts || !rgb))) return SHL_ENULL;
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (shl__check_finite_f(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
     const long nblocks = (npts + CHUNK - 1) / CHUNK;
     batch_f_job job = {ctx, lights, npts, pts, rgb, grad};
@@ -235,8 +234,7 @@ int shl_lights_eval_batch_mt(const shl_ctx *ctx, const shl_lights *lights, int n
 {
     if (!ctx || !lights || !pts || !rgb) return SHL_ENULL;
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (shl__check_finite(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     batch_job job = {lights, ctx->lmax, pts, rgb, grad};
     return shl__parallel_for_ws(npts, 1, nthreads, sizeof(double) * shl__lights_ws_size(ctx->lmax), batch_range,
                                 &job); /* SHL_ENOMEM, SHL_ETHREAD: nothing written */

@@ -55,8 +55,7 @@ int shl_sphere_batch_f_mt(const shl_ctx *ctx, const float center[3], float radiu
     if (npts < 0 || shl__check_threads(nthreads)) return SHL_EDOMAIN;
     if (shl__check_finite_f(center, 3) || !isfinite(radius)) return SHL_ENONFINITE;
     if (!(radius > 0.0f)) return SHL_EDOMAIN;
-    for (int p = 0; p < npts; ++p)
-        if (shl__check_finite_f(pts + 3 * (size_t)p, 3)) return SHL_ENONFINITE;
+    if (shl__check_finite_f(pts, 3 * (size_t)npts)) return SHL_ENONFINITE;
     if (npts == 0) return SHL_OK;
     const sphere_light s = {{center[0], center[1], center[2]}, radius};
     return shl__batch_run(ctx, sphere_eval, &s, ctx->isa->sphere_work_bytes(ctx->lmax, grad != NULL), npts, pts, coeffs,

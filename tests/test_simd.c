@@ -464,6 +464,70 @@ SHL_TEST(simd_bad_input)
     shl_ctx_destroy(ctx);
 }
 
+/* Every batch entry point rejects a non-finite coordinate wherever it is in the point array
+ * (the check runs over the whole array in blocks of 16 values and a rest: src/context.c), and
+ * accepts finite extremes; on rejection nothing is written.  Reference: C's isfinite.  Arrays
+ * of 1, 5, 6, 11 and 40 points (3, 15, 18, 33, 120 values: only the rest, one block + 2, two
+ * blocks + 1, seven blocks + 8), every position, NaN of both signs and both infinities. */
+SHL_TEST(batch_nonfinite_points_any_position)
+{
+    enum { MAXP = 40, LMAX = 2, NC = 9 };
+    shl_ctx *ctx;
+    CHECK(shl_ctx_create(LMAX, &ctx) == SHL_OK);
+    shl_lights *lights;
+    CHECK(shl_lights_create(&lights) == SHL_OK);
+    const double tri[9] = {-0.5, -0.5, 2.0, 0.5, -0.5, 2.0, 0.0, 0.5, 2.0}, rgb[3] = {1.0, 1.0, 1.0};
+    CHECK(shl_lights_add_polygon(lights, tri, 3, rgb, 1) == SHL_OK);
+    const double lo[3] = {-1.0, -1.0, -1.0}, hi[3] = {1.0, 1.0, 1.0};
+    const int res[3] = {3, 3, 3};
+    shl_grid *grid;
+    shl_agrid *agrid;
+    CHECK(shl_grid_create(ctx, lo, hi, res, SHL_GRID_FLOAT, &grid) == SHL_OK);
+    CHECK(shl_grid_fill(grid, lights, 1) == SHL_OK);
+    CHECK(shl_agrid_create(ctx, lo, hi, res, SHL_AGRID_MAX, 1e-3, 200, &agrid) == SHL_OK);
+    CHECK(shl_agrid_fill(agrid, lights, 1) == SHL_OK);
+    const float tri_f[9] = {-0.5f, -0.5f, 2.0f, 0.5f, -0.5f, 2.0f, 0.0f, 0.5f, 2.0f}, center[3] = {0.0f, 0.0f, 3.0f};
+    static float pf[3 * MAXP], cf[3 * NC * MAXP], gf[9 * NC * MAXP];
+    static double pd[3 * MAXP], cd[3 * NC * MAXP], gd[9 * NC * MAXP];
+    const float bad[4] = {NAN, -NAN, INFINITY, -INFINITY};
+    const float extreme[4] = {FLT_MAX, -FLT_MAX, FLT_TRUE_MIN, -0.0f};
+    const int counts[5] = {1, 5, 6, 11, MAXP};
+    long rejected = 0, calls = 0;
+    for (int ci = 0; ci < 5; ++ci) {
+        const int n = counts[ci];
+        for (int i = 0; i < 3 * n; ++i) {
+            for (int b = 0; b < 8; ++b) {
+                for (int k = 0; k < 3 * n; ++k) pf[k] = 0.1f * (float)(k % 7) - 0.3f;
+                pf[i] = b < 4 ? bad[b] : extreme[b - 4];
+                for (int k = 0; k < 3 * n; ++k) pd[k] = pf[k];
+                const int want = b < 4 || !isfinite(pf[i]) ? SHL_ENONFINITE : SHL_OK;
+                for (int k = 0; k < 3 * NC * n; ++k) cf[k] = 7.0f, cd[k] = 7.0;
+                int got[7];
+                got[0] = shl_polygon_batch_f(ctx, tri_f, 3, n, pf, cf, gf);
+                got[1] = shl_sphere_batch_f(ctx, center, 0.5f, n, pf, cf, gf);
+                got[2] = shl_lights_eval_batch_f(ctx, lights, n, pf, cf, gf);
+                got[3] = shl_lights_eval_batch(ctx, lights, n, pd, cd, gd);
+                got[4] = shl_grid_interp(grid, SHL_INTERP_HERMITE, 1.0, n, pd, cd, 1);
+                got[5] = shl_grid_interp_f(grid, SHL_INTERP_HERMITE, 1.0, n, pf, cf, 1);
+                got[6] = shl_agrid_interp(agrid, n, pd, cd, 1);
+                for (int f = 0; f < 7; ++f) {
+                    if (want == SHL_OK) CHECK(got[f] == SHL_OK);
+                    else CHECK(got[f] == SHL_ENONFINITE);
+                    rejected += got[f] == SHL_ENONFINITE;
+                }
+                calls += 7;
+                if (want != SHL_OK)
+                    for (int k = 0; k < 3 * NC * n; ++k) CHECK(cf[k] == 7.0f && cd[k] == 7.0);
+            }
+        }
+    }
+    harness_note("%ld calls, %ld rejected (every non-finite one)", calls, rejected);
+    shl_agrid_destroy(agrid);
+    shl_grid_destroy(grid);
+    shl_lights_destroy(lights);
+    shl_ctx_destroy(ctx);
+}
+
 /* Extreme scales of the float batch (issue 8, K3, B3), every ISA:
  *  - vertices equal up to the sign of zero (extent 0): zeros, no undefined
  *    behaviour (ilogb(0) was negated; UBSan in make SANITIZE=1);
