@@ -467,8 +467,8 @@ SHL_TEST(simd_bad_input)
 /* Every batch entry point rejects a non-finite coordinate wherever it is in the point array
  * (the check runs over the whole array in blocks of 16 values and a rest: src/context.c), and
  * accepts finite extremes; on rejection nothing is written.  Reference: C's isfinite.  Arrays
- * of 1, 5, 6, 11 and 40 points (3, 15, 18, 33, 120 values: only the rest, one block + 2, two
- * blocks + 1, seven blocks + 8), every position, NaN of both signs and both infinities. */
+ * of 1, 5, 6, 11 and 40 points (3, 15, 18, 33, 120 values: a rest only, twice, then one block
+ * + 2, two blocks + 1, seven blocks + 8), every position, NaN of both signs and both infinities. */
 SHL_TEST(batch_nonfinite_points_any_position)
 {
     enum { MAXP = 40, LMAX = 2, NC = 9 };
