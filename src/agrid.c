@@ -176,7 +176,7 @@ static int add_node(shl__alevel *L, const int i[3], size_t node_len)
     return SHL_OK;
 }
 
-/* Add cell c (not yet present); its corners and flags are set by resolve_cells. */
+/* Add cell c (not yet present); its corners and flags are set by resolve_cell. */
 static int add_cell(shl__alevel *L, const int c[3])
 {
     if (L->ncells == L->cell_cap) {
@@ -192,11 +192,11 @@ static int add_cell(shl__alevel *L, const int c[3])
     return SHL_OK;
 }
 
-/* The corner nodes of cells from.. (present: added with the cell) and every cell's
- * flags (bit j: corner j flagged; all set on level 0). */
-static void resolve_cells(shl__alevel *L, size_t from, int level0)
+/* Cell c's corner nodes (present: added with the cell), if fresh, and its flags (bit j:
+ * corner j flagged; all set on level 0). */
+static void resolve_cell(shl__alevel *L, size_t c, int fresh, int level0)
 {
-    for (size_t c = from; c < L->ncells; ++c) {
+    if (fresh) {
         int ci[3];
         unkey(L->cell_key[c], ci);
         for (int j = 0; j < 8; ++j) {
@@ -205,12 +205,10 @@ static void resolve_cells(shl__alevel *L, size_t from, int level0)
             L->cell[c].node[j] = (uint32_t)hfind(&L->nodes, key3(v));
         }
     }
-    for (size_t c = 0; c < L->ncells; ++c) {
-        unsigned char cf = level0 ? 0xFF : 0;
-        for (int j = 0; j < 8; ++j)
-            if (L->flag[L->cell[c].node[j]]) cf |= (unsigned char)(1u << j);
-        L->cell[c].flags = cf;
-    }
+    unsigned char cf = level0 ? 0xFF : 0;
+    for (int j = 0; j < 8; ++j)
+        if (L->flag[L->cell[c].node[j]]) cf |= (unsigned char)(1u << j);
+    L->cell[c].flags = cf;
 }
 
 /* Level 0: every node and cell, nodes in lattice order. */
@@ -224,7 +222,7 @@ static int build_level0(const shl_agrid *g, shl__alevel *L)
                 if (add_node(L, i, g->node_len)) return SHL_ENOMEM;
                 if (i[0] < L->n[0] && i[1] < L->n[1] && i[2] < L->n[2] && add_cell(L, i)) return SHL_ENOMEM;
             }
-    resolve_cells(L, 0, 1);
+    for (size_t c = 0; c < L->ncells; ++c) resolve_cell(L, c, 1, 1);
     return SHL_OK;
 }
 
@@ -446,7 +444,7 @@ int shl_agrid_set_weighted_receivers(shl_agrid *grid, int npts, const double *pt
 
 /* ---- fill ---- */
 
-enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2 };
+enum { BLOCK = SHL__LIGHTS_BLOCK, SAMPLES = 2, CELL_BLOCK = 1024 };
 
 /* A cell (index in its level), its estimate e, its weight w (cell_weight) and its
  * refinement priority p = e w; or, if pending, a refined cell whose children are not
@@ -464,6 +462,8 @@ typedef struct {
     shl__alevel *lev;
     size_t from[SHL_AGRID_LEVELS_MAX]; /* eval_nodes: the nodes from[l].. of each level l are new, */
     long blk[SHL_AGRID_LEVELS_MAX + 1]; /* in blocks blk[l] .. blk[l + 1] - 1 (none crosses a level) */
+    size_t cells_from[SHL_AGRID_LEVELS_MAX]; /* and the cells of levels 1.. (from cells_from[l] new) */
+    long cblk[SHL_AGRID_LEVELS_MAX + 1];     /* in blocks blk[LEVELS_MAX] + cblk[l] .. (level 0: none) */
     ranked *which;  /* estimate_cells: the cells estimated (any levels), their estimates into .e */
     size_t nwhich;
     char *ws;
@@ -474,7 +474,10 @@ typedef struct {
 
 /* The new nodes of every level, blocks of BLOCK consecutive nodes of one level,
  * through the float batch with gradients (Wu 2020 Alg. 1 l. 5-7), straight into
- * the node data. */
+ * the node data; and, in blocks of CELL_BLOCK, the corners of the new cells of
+ * levels 1.. and the flags of all their cells (refine() flags nodes of old cells
+ * too), which the pass's node data does not need: they run beside it instead of
+ * on the calling thread before it. */
 static void nodes_range(void *arg, int worker, long begin, long end)
 {
     const fill_job *job = arg;
@@ -482,6 +485,16 @@ static void nodes_range(void *arg, int worker, long begin, long end)
     void *buf = job->batch_bytes ? job->ws + job->stride * (size_t)worker : NULL;
     float pts[3 * BLOCK];
     for (long b = begin; b < end; ++b) {
+        if (b >= job->blk[SHL_AGRID_LEVELS_MAX]) {
+            const long cb = b - job->blk[SHL_AGRID_LEVELS_MAX];
+            int l = 1;
+            while (cb >= job->cblk[l + 1]) ++l;
+            shl__alevel *L = job->lev + l;
+            const size_t c0 = (size_t)(cb - job->cblk[l]) * CELL_BLOCK;
+            const size_t c1 = L->ncells - c0 < CELL_BLOCK ? L->ncells : c0 + CELL_BLOCK;
+            for (size_t c = c0; c < c1; ++c) resolve_cell(L, c, c >= job->cells_from[l], 0);
+            continue;
+        }
         int l = 0;
         while (b >= job->blk[l + 1]) ++l;
         shl__alevel *L = job->lev + l;
@@ -567,13 +580,17 @@ static int run(fill_job *job, long nblocks, int nthreads, shl__range_fn fn, size
     return shl__parallel_for(nblocks, 1, nw, fn, job);
 }
 
-/* The nodes of levels 0..nl-1 not yet evaluated, in one parallel pass. */
-static int eval_nodes(fill_job *job, int nl, int nthreads)
+/* The nodes of levels 0..nl-1 not yet evaluated and, if cells, the cells of levels 1..nl-1
+ * (those from job->cells_from[l] new), in one parallel pass. */
+static int eval_nodes(fill_job *job, int nl, int cells, int nthreads)
 {
     job->blk[0] = 0;
     for (int l = 0; l < SHL_AGRID_LEVELS_MAX; ++l)
         job->blk[l + 1] = job->blk[l] + (l < nl ? (long)((job->lev[l].nnodes - job->from[l] + BLOCK - 1) / BLOCK) : 0);
-    const int st = run(job, job->blk[SHL_AGRID_LEVELS_MAX], nthreads, nodes_range, 0);
+    job->cblk[0] = job->cblk[1] = 0;
+    for (int l = 1; l < SHL_AGRID_LEVELS_MAX; ++l)
+        job->cblk[l + 1] = job->cblk[l] + (cells && l < nl ? (long)((job->lev[l].ncells + CELL_BLOCK - 1) / CELL_BLOCK) : 0);
+    const int st = run(job, job->blk[SHL_AGRID_LEVELS_MAX] + job->cblk[SHL_AGRID_LEVELS_MAX], nthreads, nodes_range, 0);
     for (int l = 0; !st && l < nl; ++l) job->from[l] = job->lev[l].nnodes;
     return st;
 }
@@ -717,7 +734,7 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
     job.batch_bytes = shl__lights_batch_f_bytes(&job.ctx, lights, 1); /* >= the values-only size */
     *nl = 1;
     int status = build_level0(g, lev);
-    if (!status) status = eval_nodes(&job, 1, nthreads);
+    if (!status) status = eval_nodes(&job, 1, 0, nthreads);
     long total = (long)lev[0].nnodes;
     ranked *queue = NULL, *est = NULL, *done = NULL;
     size_t nq = 0, qcap = 0, ne = 0, ecap = 0, nd = 0, dcap = 0;
@@ -781,8 +798,8 @@ static int build(const shl_agrid *g, const shl_lights *lights, int nthreads, shl
             --*nl;
         }
         if (status) break;
-        for (int l = 1; l < *nl; ++l) resolve_cells(lev + l, cells0[l], 0);
-        if ((status = eval_nodes(&job, *nl, nthreads))) break;
+        for (int l = 1; l < *nl; ++l) job.cells_from[l] = cells0[l];
+        if ((status = eval_nodes(&job, *nl, 1, nthreads))) break;
         /* a refined cell's children wait in the queue, unestimated, as one pending entry
          * with the bounds the assumption that refinement does not increase e gives
          * (include/shlight.h): e_child <= e, so p_child <= e max_j w_j (= p / 8 without
