@@ -101,14 +101,15 @@ static inline void shl__interp_ahead_plan(shl__interp_ahead *a, size_t nblocks)
     a->step = nblocks ? (a->lines + nblocks - 1) / nblocks : a->lines;
 }
 
-/* Requests the next step lines of every row (at most up to the row's last byte). */
+/* Requests the next step lines of every row (at most up to the row's last byte), row by
+ * row: runs of consecutive lines (measured on the AMD EPYC Zen 4 guest, lmax 8 Hermite,
+ * 1.25 GB float grid, random points: 1781-1793 -> 1676 ns per vertex against line by line
+ * across the rows). */
 static inline void shl__interp_ahead_step(shl__interp_ahead *a)
 {
     const size_t end = a->lines - a->done < a->step ? a->lines : a->done + a->step;
-    for (size_t l = a->done; l < end; ++l) {
-        const size_t o = 64 * l < a->bytes ? 64 * l : a->bytes - 1;
-        for (int r = 0; r < a->nrange; ++r) SHL__PREFETCH(a->row[r] + o);
-    }
+    for (int r = 0; r < a->nrange; ++r)
+        for (size_t l = a->done; l < end; ++l) SHL__PREFETCH(a->row[r] + (64 * l < a->bytes ? 64 * l : a->bytes - 1));
     a->done = end;
 }
 
