@@ -301,6 +301,18 @@ static double *sorted_by_cell(const double *pts, long n, int res)
  * one added (each load brings its whole line; one add per line, in 16 independent sums).  ahead: the next vertex's
  * lines requested as src/interp.c and simd/kernel_api.h do (into L2, one step of lines per row
  * with each block read); 0: demand loads only.  Seconds per vertex. */
+/* The 4 ranges (corners 2q, 2q + 1) of point p's cell on pattern_read's array. */
+static void corner_ranges(const float *nodes, size_t node_floats, int res, const double *p, const float *range[4])
+{
+    size_t c[3];
+    for (int a = 0; a < 3; ++a) {
+        const int i = (int)(p[a] * (res - 1));
+        c[a] = (size_t)(i < res - 2 ? i : res - 2);
+    }
+    for (int q = 0; q < 4; ++q)
+        range[q] = nodes + (c[0] + (size_t)res * ((c[1] + (q & 1)) + (size_t)res * (c[2] + (q >> 1)))) * node_floats;
+}
+
 static double pattern_read(const float *nodes, size_t node_floats, int res, const double *pts, long n, int ahead)
 {
     enum { LINE_FLOATS = 16 };
@@ -309,22 +321,14 @@ static double pattern_read(const float *nodes, size_t node_floats, int res, cons
     float acc[LINE_FLOATS] = {0};
     const float *row[4], *next[4];
     const double t0 = one_core_now();
+    if (n > 0) corner_ranges(nodes, node_floats, res, pts, row);
     for (long v = 0; v < n; ++v) {
-        for (long u = v; u <= v + 1 && u < n; ++u) {
-            size_t c[3];
-            for (int a = 0; a < 3; ++a) {
-                const int i = (int)(pts[3 * u + a] * (res - 1));
-                c[a] = (size_t)(i < res - 2 ? i : res - 2);
-            }
-            for (int q = 0; q < 4; ++q) {
-                const size_t node = c[0] + (size_t)res * ((c[1] + (q & 1)) + (size_t)res * (c[2] + (q >> 1)));
-                (u == v ? row : next)[q] = nodes + node * node_floats;
-            }
-        }
+        if (v + 1 < n) corner_ranges(nodes, node_floats, res, pts + 3 * (v + 1), next);
         size_t done = 0, read = 0;
         for (int q = 0; q < 4; ++q)
             for (size_t i = 0; i + LINE_FLOATS <= range; i += LINE_FLOATS) {
-                /* as shl__interp_ahead_step: the next vertex's lines spread evenly over this one's reads */
+                /* the next vertex's lines spread evenly over this one's reads, one line of each
+                 * range at a time (for this read the fastest schedule tried: bench/RESULTS.md) */
                 const size_t due = ++read * lines / reads;
                 for (; ahead && v + 1 < n && done < due; ++done) {
                     const size_t o = 64 * done < range * sizeof(float) ? 64 * done : range * sizeof(float) - 1;
@@ -332,7 +336,10 @@ static double pattern_read(const float *nodes, size_t node_floats, int res, cons
                 }
                 acc[read % LINE_FLOATS] += row[q][i];
             }
-        for (int q = 0; q < 4; ++q) acc[q] += row[q][range - 1]; /* the line of the range's end */
+        for (int q = 0; q < 4; ++q) {
+            acc[q] += row[q][range - 1]; /* the line of the range's end */
+            if (v + 1 < n) row[q] = next[q];
+        }
     }
     const double t = one_core_now() - t0;
     for (int k = 0; k < LINE_FLOATS; ++k) bench_sink += acc[k];
